@@ -1,0 +1,1 @@
+//! Learning: the MDP over `referee::Match`, DQN and PPO on tch.

@@ -1,0 +1,300 @@
+//! Game-level wire types: ids, actions, observations, events, statistics.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// Robots a team fields.
+pub const PLAYERS_PER_TEAM: usize = 4;
+/// Robots on the pitch.
+pub const ROBOTS: usize = 2 * PLAYERS_PER_TEAM;
+
+/// A team. Blue kicks off first and, in world coordinates, attacks +x.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Team {
+    Blue,
+    Red,
+}
+
+impl Team {
+    pub const BOTH: [Team; 2] = [Team::Blue, Team::Red];
+
+    pub fn other(self) -> Team {
+        match self {
+            Team::Blue => Team::Red,
+            Team::Red => Team::Blue,
+        }
+    }
+
+    /// 0 for blue, 1 for red.
+    pub fn index(self) -> usize {
+        match self {
+            Team::Blue => 0,
+            Team::Red => 1,
+        }
+    }
+
+    /// +1 for blue (attacks +x in world coordinates), -1 for red.
+    pub fn direction(self) -> f32 {
+        match self {
+            Team::Blue => 1.0,
+            Team::Red => -1.0,
+        }
+    }
+}
+
+impl fmt::Display for Team {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Team::Blue => "blue",
+            Team::Red => "red",
+        })
+    }
+}
+
+impl std::str::FromStr for Team {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "blue" => Ok(Team::Blue),
+            "red" => Ok(Team::Red),
+            other => Err(format!("unknown team {other:?} (expected blue or red)")),
+        }
+    }
+}
+
+/// A robot on the pitch: 0..=3 are blue players 0..=3, 4..=7 red players 0..=3.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(try_from = "u8", into = "u8")]
+pub struct RobotId(u8);
+
+impl RobotId {
+    pub fn new(team: Team, player: usize) -> Option<RobotId> {
+        (player < PLAYERS_PER_TEAM).then(|| RobotId((team.index() * PLAYERS_PER_TEAM + player) as u8))
+    }
+    pub fn from_index(i: usize) -> Option<RobotId> {
+        (i < ROBOTS).then_some(RobotId(i as u8))
+    }
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+    pub fn team(self) -> Team {
+        if (self.0 as usize) < PLAYERS_PER_TEAM {
+            Team::Blue
+        } else {
+            Team::Red
+        }
+    }
+    /// Player number within the team, 0..=3.
+    pub fn player(self) -> usize {
+        self.0 as usize % PLAYERS_PER_TEAM
+    }
+    pub fn all() -> impl Iterator<Item = RobotId> {
+        (0..ROBOTS as u8).map(RobotId)
+    }
+}
+
+impl TryFrom<u8> for RobotId {
+    type Error = String;
+    fn try_from(v: u8) -> Result<Self, Self::Error> {
+        RobotId::from_index(v as usize).ok_or_else(|| format!("robot id {v} out of range 0..{ROBOTS}"))
+    }
+}
+
+impl From<RobotId> for u8 {
+    fn from(r: RobotId) -> u8 {
+        r.0
+    }
+}
+
+/// The paper's five actions. One holds for one control tick.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Action {
+    Forward,
+    TurnLeft,
+    TurnRight,
+    Shoot,
+    #[default]
+    Stay,
+}
+
+impl Action {
+    pub const ALL: [Action; 5] = [
+        Action::Forward,
+        Action::TurnLeft,
+        Action::TurnRight,
+        Action::Shoot,
+        Action::Stay,
+    ];
+
+    /// Index in [`Action::ALL`] (the learning crate's discrete action id).
+    pub fn index(self) -> usize {
+        match self {
+            Action::Forward => 0,
+            Action::TurnLeft => 1,
+            Action::TurnRight => 2,
+            Action::Shoot => 3,
+            Action::Stay => 4,
+        }
+    }
+
+    pub fn from_index(i: usize) -> Option<Action> {
+        Action::ALL.get(i).copied()
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Action::Forward => "forward",
+            Action::TurnLeft => "turn_left",
+            Action::TurnRight => "turn_right",
+            Action::Shoot => "shoot",
+            Action::Stay => "stay",
+        }
+    }
+}
+
+impl std::str::FromStr for Action {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Action::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| format!("unknown action {s:?}"))
+    }
+}
+
+/// One robot as a player sees it, in the observing team's frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct RobotObs {
+    /// Position on the pitch in metres; the observing team attacks +x.
+    pub x: f32,
+    pub y: f32,
+    /// Heading in radians in (-pi, pi], 0 = facing +x (the opponent goal).
+    pub heading: f32,
+    /// Lying on the pitch (waiting to get up).
+    pub fallen: bool,
+}
+
+/// The ball as a player sees it, in the observing team's frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct BallObs {
+    pub x: f32,
+    pub y: f32,
+    /// Velocity in m/s.
+    pub vx: f32,
+    pub vy: f32,
+}
+
+/// Goals so far, from the observing team's side.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub struct ScoreObs {
+    pub own: u32,
+    pub opponent: u32,
+}
+
+/// What one player receives every control tick. The paper's state
+/// `s_t = [P, p_ball, if_c, P_oppo]` plus headings, fall flags, score and clock.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Observation {
+    /// Control tick this observation was taken at (before the action is applied).
+    pub tick: u64,
+    pub team: Team,
+    /// Which of `own` is the receiving robot (0..=3).
+    pub player: u8,
+    /// Match time left in seconds.
+    pub time_left: f32,
+    pub score: ScoreObs,
+    /// Own robots, indexed by player number.
+    pub own: [RobotObs; PLAYERS_PER_TEAM],
+    /// Opponent robots, indexed by their player number.
+    pub opponents: [RobotObs; PLAYERS_PER_TEAM],
+    pub ball: BallObs,
+    /// The paper's `if_c`: which own robot controls the ball (at most one true).
+    pub control: [bool; PLAYERS_PER_TEAM],
+    /// Whether an opponent controls the ball.
+    pub opponent_control: bool,
+}
+
+impl Observation {
+    /// The receiving robot.
+    pub fn me(&self) -> &RobotObs {
+        &self.own[self.player as usize % PLAYERS_PER_TEAM]
+    }
+}
+
+/// Something the referee saw happen, at a control tick. Positions are in
+/// world coordinates (blue attacks +x).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Event {
+    /// A goal for `team` (scored into the other team's goal).
+    Goal { tick: u64, team: Team, scorer: Option<RobotId> },
+    /// A kick that moved the ball.
+    Kick { tick: u64, robot: RobotId, speed: f32 },
+    /// Possession moved between two teammates after a kick by the first.
+    Pass { tick: u64, from: RobotId, to: RobotId },
+    Fall { tick: u64, robot: RobotId },
+    GetUp { tick: u64, robot: RobotId },
+    /// The ball left the field; it was put back at (x, y). `last_touch` is the
+    /// team whose robot touched it last, if known.
+    BallOut { tick: u64, x: f32, y: f32, last_touch: Option<Team> },
+    /// A robot left the field and was reset to its predetermined position.
+    RobotOut { tick: u64, robot: RobotId },
+    /// Play (re)starts from the centre: at the start and after each goal.
+    KickOff { tick: u64, team: Team },
+    /// The clock ran out.
+    End { tick: u64 },
+}
+
+impl Event {
+    pub fn tick(&self) -> u64 {
+        match self {
+            Event::Goal { tick, .. }
+            | Event::Kick { tick, .. }
+            | Event::Pass { tick, .. }
+            | Event::Fall { tick, .. }
+            | Event::GetUp { tick, .. }
+            | Event::BallOut { tick, .. }
+            | Event::RobotOut { tick, .. }
+            | Event::KickOff { tick, .. }
+            | Event::End { tick } => *tick,
+        }
+    }
+}
+
+/// One team's statistics over a match.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct TeamStats {
+    pub goals: u32,
+    /// Ticks this team controlled the ball / ticks any team controlled it, in [0, 1].
+    pub control_rate: f64,
+    /// Ticks this team controlled the ball.
+    pub control_ticks: u64,
+    pub passes: u32,
+    pub shots: u32,
+    pub falls: u32,
+    pub out_of_bounds: u32,
+}
+
+/// Both teams' statistics.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct MatchStats {
+    pub blue: TeamStats,
+    pub red: TeamStats,
+}
+
+impl MatchStats {
+    pub fn team(&self, team: Team) -> &TeamStats {
+        match team {
+            Team::Blue => &self.blue,
+            Team::Red => &self.red,
+        }
+    }
+    pub fn team_mut(&mut self, team: Team) -> &mut TeamStats {
+        match team {
+            Team::Blue => &mut self.blue,
+            Team::Red => &mut self.red,
+        }
+    }
+}

@@ -1,0 +1,22 @@
+//! Rules over sim state and `Match`, the one driver used by the server, the
+//! in-process runner and training alike.
+//!
+//! API CONTRACT (used by server, learn, the CLI; keep these signatures):
+//! ```ignore
+//! pub struct MatchConfig { pub sim: SimConfig, pub rules: RulesConfig, pub reward: RewardConfig, pub minutes: f32, pub control_hz: f32, .. }
+//!     // serde + Default (paper values) ; MatchConfig::from_toml_str(&str) / from_file(&Path) -> Result<_, ConfigError>;
+//!     // MatchConfig::default() equals assets/match.toml
+//! pub struct Match { .. }
+//! impl Match {
+//!     pub fn new(cfg: &MatchConfig, seed: u64) -> Result<Match, MatchError>;
+//!     pub fn step(&mut self, actions: &[proto::Action; 8]) -> &[proto::Event]; // one control tick: events of that tick
+//!     pub fn observe(&self, team: Team, player: usize) -> proto::Observation;   // mirrored: team attacks +x
+//!     pub fn observe_into(&self, team: Team, player: usize, out: &mut proto::Observation);
+//!     pub fn tick(&self) -> u64;  pub fn total_ticks(&self) -> u64;  pub fn is_finished(&self) -> bool;
+//!     pub fn score(&self) -> (u32, u32); pub fn stats(&self) -> proto::MatchStats;
+//!     pub fn state_hash(&self) -> u64; pub fn seed(&self) -> u64; pub fn config(&self) -> &MatchConfig;
+//!     pub fn sim(&self) -> &Sim; pub fn sim_mut(&mut self) -> &mut Sim;  // tests stage situations
+//!     pub fn controller(&self) -> Option<RobotId>;  // who holds the ball (if_c), at most one
+//!     pub fn rewards(&self, team: Team) -> [f32; 4]; // per-robot reward of the last tick (learn's MDP)
+//! }
+//! ```

@@ -1,0 +1,1 @@
+//! The match server: listener, connections, lockstep and real-time schedulers, recording.

@@ -1,0 +1,5 @@
+//! One module per subcommand (or family of subcommands).
+pub mod bench;
+pub mod client;
+pub mod play;
+pub mod server;
