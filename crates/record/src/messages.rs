@@ -1,0 +1,134 @@
+//! The JSON messages of the naosoccer channels (see docs/RECORDINGS.md).
+
+use naosoccer_proto::{Action, MatchStats, RobotId, ROBOTS};
+use naosoccer_referee::{Match, MatchConfig};
+use serde::{Deserialize, Serialize};
+
+/// Version of the channel layout; bumped when a message changes incompatibly.
+pub const RECORDING_FORMAT: u32 = 1;
+
+/// `/match/meta`, once at the start: everything re-simulation needs besides
+/// the actions, and who played.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MatchMeta {
+    pub format: u32,
+    pub naosoccer_version: String,
+    pub seed: u64,
+    pub config: MatchConfig,
+    /// What played each team (policy names or client descriptions).
+    pub blue: String,
+    pub red: String,
+    /// `match` (in process) or `server`.
+    pub source: String,
+    /// The server's match id, if recorded by a server.
+    #[serde(default)]
+    pub match_id: Option<u64>,
+    /// `lockstep` or `realtime` for server matches.
+    #[serde(default)]
+    pub mode: Option<String>,
+    pub control_hz: f32,
+    pub total_ticks: u64,
+}
+
+/// `/match/actions`, every control tick: the actions applied to go from tick
+/// `tick` to `tick + 1` (robots 0..=3 blue, 4..=7 red).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TickActions {
+    pub tick: u64,
+    pub actions: [Action; ROBOTS],
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ScoreRecord {
+    pub blue: u32,
+    pub red: u32,
+}
+
+/// The ball in world coordinates (m, m/s).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BallRecord {
+    pub x: f32,
+    pub y: f32,
+    pub z: f32,
+    pub vx: f32,
+    pub vy: f32,
+    pub vz: f32,
+}
+
+/// A robot's torso in world coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RobotRecord {
+    pub x: f32,
+    pub y: f32,
+    pub z: f32,
+    /// Radians, 0 = facing +x (blue's attacking direction).
+    pub heading: f32,
+    /// Radians from upright.
+    pub tilt: f32,
+    pub fallen: bool,
+}
+
+/// `/match/state`, at tick 0 and after every control tick.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StateRecord {
+    pub tick: u64,
+    /// Game seconds since kick-off.
+    pub time: f64,
+    pub score: ScoreRecord,
+    /// The robot controlling the ball (the paper's `if_c`), if any.
+    pub possession: Option<RobotId>,
+    pub ball: BallRecord,
+    pub robots: [RobotRecord; ROBOTS],
+    /// `Match::state_hash`, 16 hex digits: what replay compares.
+    pub state_hash: String,
+}
+
+impl StateRecord {
+    pub fn of(m: &Match) -> StateRecord {
+        let snap = m.sim().snapshot();
+        let (blue, red) = m.score();
+        let b = &snap.ball;
+        StateRecord {
+            tick: m.tick(),
+            time: m.sim_seconds(),
+            score: ScoreRecord { blue, red },
+            possession: m.controller(),
+            ball: BallRecord {
+                x: b.pos[0],
+                y: b.pos[1],
+                z: b.pos[2],
+                vx: b.vel[0],
+                vy: b.vel[1],
+                vz: b.vel[2],
+            },
+            robots: std::array::from_fn(|i| {
+                let r = &snap.robots[i];
+                RobotRecord {
+                    x: r.pos[0],
+                    y: r.pos[1],
+                    z: r.pos[2],
+                    heading: r.heading,
+                    tilt: r.tilt,
+                    fallen: r.fallen,
+                }
+            }),
+            state_hash: hash_hex(m.state_hash()),
+        }
+    }
+}
+
+/// `/match/stats`, once at the end.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FinalRecord {
+    pub ticks: u64,
+    pub score: ScoreRecord,
+    pub stats: MatchStats,
+    pub state_hash: String,
+    /// False when the match was stopped before its clock ran out (server
+    /// shutdown or a failure); the statistics are then those so far.
+    pub completed: bool,
+}
+
+pub fn hash_hex(h: u64) -> String {
+    format!("{h:016x}")
+}

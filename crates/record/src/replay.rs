@@ -1,0 +1,74 @@
+//! Re-simulating a recording and comparing every tick's state.
+
+use naosoccer_referee::Match;
+
+use crate::messages::StateRecord;
+use crate::reader::Recording;
+use crate::RecordError;
+
+/// What a replay found.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ReplayOutcome {
+    /// Every recorded state was reproduced bit for bit (by state hash).
+    Identical {
+        /// Control ticks re-simulated.
+        ticks: u64,
+        /// Whether the recording was cut short (only its completed part was checked).
+        truncated: bool,
+    },
+    /// The first tick whose re-simulated state differs from the recording.
+    Diverged {
+        tick: u64,
+        recorded: Box<StateRecord>,
+        replayed: Box<StateRecord>,
+    },
+}
+
+/// Re-runs the match from its config, seed and recorded actions and compares
+/// the state after every tick with the recorded one.
+pub fn replay(rec: &Recording) -> Result<ReplayOutcome, RecordError> {
+    let mut m = Match::new(&rec.meta.config, rec.meta.seed)?;
+    let mut states = rec.states.iter().peekable();
+    let check = |m: &Match, recorded: &StateRecord| -> Option<ReplayOutcome> {
+        // The hash covers the raw bits of every body and the referee's
+        // state; the other fields are there to show a person what differs.
+        let replayed = StateRecord::of(m);
+        (replayed.state_hash != recorded.state_hash).then(|| ReplayOutcome::Diverged {
+            tick: m.tick(),
+            recorded: Box::new(recorded.clone()),
+            replayed: Box::new(replayed),
+        })
+    };
+    // States are written at tick 0 and after each step, in tick order.
+    if let Some(s) = states.next_if(|s| s.tick == 0) {
+        if let Some(d) = check(&m, s) {
+            return Ok(d);
+        }
+    }
+    let mut ticks = 0;
+    for a in &rec.actions {
+        if a.tick != m.tick() {
+            return Err(RecordError::NotARecording(format!(
+                "actions for tick {} follow tick {}: ticks are missing",
+                a.tick,
+                m.tick()
+            )));
+        }
+        if m.is_finished() {
+            break;
+        }
+        m.step(&a.actions);
+        ticks += 1;
+        while let Some(s) = states.next_if(|s| s.tick <= m.tick()) {
+            if s.tick == m.tick() {
+                if let Some(d) = check(&m, s) {
+                    return Ok(d);
+                }
+            }
+        }
+    }
+    Ok(ReplayOutcome::Identical {
+        ticks,
+        truncated: !rec.is_complete(),
+    })
+}

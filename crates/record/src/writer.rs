@@ -1,0 +1,243 @@
+//! Writing a match to MCAP while it is played.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{Seek, Write};
+use std::path::Path;
+
+use mcap::records::MessageHeader;
+use mcap::{Compression, WriteOptions, Writer};
+use naosoccer_proto::{Action, Event, ROBOTS};
+use naosoccer_referee::Match;
+use serde::Serialize;
+
+use crate::foxglove;
+use crate::messages::{hash_hex, FinalRecord, MatchMeta, ScoreRecord, StateRecord, TickActions};
+use crate::{topics, RecordError};
+
+/// How a recording is written.
+#[derive(Debug, Clone)]
+pub struct RecorderOptions {
+    /// Uncompressed bytes after which a chunk is compressed and written out.
+    pub chunk_size: u64,
+    /// A chunk is also closed every this many control ticks, so a writer
+    /// killed mid-match loses at most this much play (100 ticks = 10 s at
+    /// 10 Hz). Tick-based, not time-based, so the bytes stay repeatable.
+    pub flush_every_ticks: u64,
+    /// zstd level (1 is fast; the JSON compresses well at any level).
+    pub compression_level: u32,
+    /// Write the Foxglove scene and transform channels.
+    pub foxglove: bool,
+}
+
+impl Default for RecorderOptions {
+    fn default() -> Self {
+        RecorderOptions {
+            chunk_size: 1 << 20,
+            flush_every_ticks: 100,
+            compression_level: 1,
+            foxglove: true,
+        }
+    }
+}
+
+/// Messages written per channel, by topic.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct RecordingSummary {
+    pub messages: BTreeMap<String, u64>,
+}
+
+#[derive(Clone, Copy)]
+enum Ch {
+    Meta,
+    Actions,
+    State,
+    Events,
+    Stats,
+    Scene,
+    Tf,
+}
+
+/// Writes one match. Call [`Recorder::tick`] after every `Match::step` and
+/// [`Recorder::finish`] at the end; dropping a recorder without `finish`
+/// leaves a file whose completed chunks are still readable.
+pub struct Recorder<W: Write + Seek> {
+    writer: Writer<W>,
+    channel_ids: [u16; 7],
+    sequences: [u32; 7],
+    tick_ns: u64,
+    opts: RecorderOptions,
+    buf: Vec<u8>,
+    state: Option<StateRecord>,
+}
+
+impl Recorder<File> {
+    /// Creates (or truncates) `path` and writes the match's start.
+    pub fn create(
+        path: &Path,
+        meta: &MatchMeta,
+        m: &Match,
+        opts: RecorderOptions,
+    ) -> Result<Self, RecordError> {
+        if let Some(dir) = path.parent() {
+            if !dir.as_os_str().is_empty() {
+                std::fs::create_dir_all(dir)?;
+            }
+        }
+        // Unbuffered on purpose: the MCAP writer already gathers a whole
+        // chunk before writing, and a chunk must reach the file as soon as
+        // it is complete for a killed server to leave it readable.
+        Recorder::new(File::create(path)?, meta, m, opts)
+    }
+}
+
+impl<W: Write + Seek> Recorder<W> {
+    pub fn new(
+        w: W,
+        meta: &MatchMeta,
+        m: &Match,
+        opts: RecorderOptions,
+    ) -> Result<Self, RecordError> {
+        let options = WriteOptions::new()
+            .compression(Some(Compression::Zstd))
+            .compression_level(opts.compression_level)
+            // Multithreaded zstd would make the bytes depend on scheduling.
+            .compression_threads(0)
+            .chunk_size(Some(opts.chunk_size))
+            .profile("")
+            .library(format!("naosoccer {}", env!("CARGO_PKG_VERSION")));
+        let mut writer = options.create(w)?;
+        let json_schema = |w: &mut Writer<W>, name: &str, data: &[u8]| {
+            w.add_schema(name, "jsonschema", data)
+        };
+        let meta_s = json_schema(&mut writer, "naosoccer.MatchMeta", b"{\"type\":\"object\"}")?;
+        let act_s = json_schema(&mut writer, "naosoccer.TickActions", b"{\"type\":\"object\"}")?;
+        let state_s = json_schema(&mut writer, "naosoccer.State", b"{\"type\":\"object\"}")?;
+        let event_s = json_schema(&mut writer, "naosoccer.Event", b"{\"type\":\"object\"}")?;
+        let stats_s = json_schema(&mut writer, "naosoccer.FinalStats", b"{\"type\":\"object\"}")?;
+        let scene_s = json_schema(
+            &mut writer,
+            foxglove::SCENE_SCHEMA_NAME,
+            &foxglove::scene_schema(),
+        )?;
+        let tf_s = json_schema(&mut writer, foxglove::TF_SCHEMA_NAME, &foxglove::tf_schema())?;
+        let schemas = [meta_s, act_s, state_s, event_s, stats_s, scene_s, tf_s];
+        let mut channel_ids = [0u16; 7];
+        for (i, topic) in topics::ALL.iter().enumerate() {
+            channel_ids[i] = writer.add_channel(schemas[i], topic, "json", &BTreeMap::new())?;
+        }
+        let tick_ns = (1e9 / f64::from(meta.control_hz)).round() as u64;
+        let mut rec = Recorder {
+            writer,
+            channel_ids,
+            sequences: [0; 7],
+            tick_ns,
+            opts,
+            buf: Vec::with_capacity(4096),
+            state: None,
+        };
+        rec.write_json(Ch::Meta, 0, meta)?;
+        if rec.opts.foxglove {
+            let scene = foxglove::scene_update(m);
+            rec.write_raw(Ch::Scene, 0, &scene)?;
+        }
+        rec.write_state(m)?;
+        Ok(rec)
+    }
+
+    fn write_raw(&mut self, ch: Ch, log_time: u64, data: &[u8]) -> Result<(), RecordError> {
+        let i = ch as usize;
+        let header = MessageHeader {
+            channel_id: self.channel_ids[i],
+            sequence: self.sequences[i],
+            log_time,
+            publish_time: log_time,
+        };
+        self.sequences[i] += 1;
+        self.writer.write_to_known_channel(&header, data)?;
+        Ok(())
+    }
+
+    fn write_json<T: Serialize>(&mut self, ch: Ch, log_time: u64, v: &T) -> Result<(), RecordError> {
+        let mut buf = std::mem::take(&mut self.buf);
+        buf.clear();
+        let r = serde_json::to_writer(&mut buf, v)
+            .map_err(|source| RecordError::Json {
+                topic: topics::ALL[ch as usize].to_string(),
+                source,
+            })
+            .and_then(|()| self.write_raw(ch, log_time, &buf));
+        self.buf = buf;
+        r
+    }
+
+    fn write_state(&mut self, m: &Match) -> Result<(), RecordError> {
+        let ns = m.tick() * self.tick_ns;
+        let state = StateRecord::of(m);
+        self.write_json(Ch::State, ns, &state)?;
+        if self.opts.foxglove {
+            let mut buf = std::mem::take(&mut self.buf);
+            foxglove::write_transforms(&mut buf, ns, &state);
+            let r = self.write_raw(Ch::Tf, ns, &buf);
+            self.buf = buf;
+            r?;
+        }
+        self.state = Some(state);
+        Ok(())
+    }
+
+    /// Records one control tick: the actions that were applied to go from
+    /// `m.tick() - 1` to `m.tick()`, the events that step returned, and the
+    /// state after it.
+    pub fn tick(
+        &mut self,
+        m: &Match,
+        actions: &[Action; ROBOTS],
+        events: &[Event],
+    ) -> Result<(), RecordError> {
+        let tick = m.tick().saturating_sub(1);
+        let ns = tick * self.tick_ns;
+        self.write_json(
+            Ch::Actions,
+            ns,
+            &TickActions {
+                tick,
+                actions: *actions,
+            },
+        )?;
+        for e in events {
+            self.write_json(Ch::Events, e.tick() * self.tick_ns, e)?;
+        }
+        self.write_state(m)?;
+        if self.opts.flush_every_ticks > 0 && m.tick() % self.opts.flush_every_ticks == 0 {
+            self.writer.flush()?;
+        }
+        Ok(())
+    }
+
+    /// Writes the final statistics, the summary and the index, and returns
+    /// the number of messages per channel and the underlying writer.
+    pub fn finish(mut self, m: &Match) -> Result<(RecordingSummary, W), RecordError> {
+        let (blue, red) = m.score();
+        let fin = FinalRecord {
+            ticks: m.tick(),
+            score: ScoreRecord { blue, red },
+            stats: m.stats(),
+            state_hash: hash_hex(m.state_hash()),
+            completed: m.is_finished(),
+        };
+        self.write_json(Ch::Stats, m.tick() * self.tick_ns, &fin)?;
+        self.writer.finish()?;
+        let messages = topics::ALL
+            .iter()
+            .zip(self.sequences)
+            .map(|(t, n)| (t.to_string(), u64::from(n)))
+            .collect();
+        Ok((RecordingSummary { messages }, self.writer.into_inner()))
+    }
+
+    /// The last state written.
+    pub fn last_state(&self) -> Option<&StateRecord> {
+        self.state.as_ref()
+    }
+}
