@@ -1,0 +1,364 @@
+"""``NaoSoccerParallelEnv``: one team of a naosoccer match as a PettingZoo
+``ParallelEnv``, each robot an agent, over the socket protocol (lockstep).
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+from gymnasium import spaces
+from pettingzoo import ParallelEnv
+
+from . import protocol
+from .client import Client
+from .errors import NaoSoccerError, ProtocolError
+from .obs import (
+    _SCORE,
+    _TIME,
+    OBS_DIM,
+    OBS_HIGH,
+    OBS_LOW,
+    FieldScale,
+    ObservationEncoder,
+    SCORE_SCALE,
+    RewardWeights,
+    team_rewards,
+)
+from .server import LocalServer
+
+OPPONENTS = ("scripted", "idle", "client")
+
+
+class NaoSoccerParallelEnv(ParallelEnv):
+    """A PettingZoo ``ParallelEnv`` in which every robot of ``team`` is an agent.
+
+    Agents are ``f"{team}_{i}"`` for players 0..3. Observations are float32
+    vectors of :data:`naosoccer.obs.OBS_DIM` (layout in docs/PYTHON.md),
+    actions ``Discrete(5)``: 0 forward, 1 turn_left, 2 turn_right, 3 shoot,
+    4 stay. One ``step`` is one control tick of the match (lockstep: the server
+    waits for the four actions). Rewards are the shaped per-robot reward of
+    :func:`naosoccer.obs.team_rewards`. The episode is the whole match: when
+    its clock runs out every agent is terminated (truncated if the server
+    shuts down) and the final ``infos`` carry the match statistics.
+
+    Where the match comes from:
+
+    * default: a private server is started (``naosoccer server`` on a free
+      loopback port, binary from ``binary``, ``$NAOSOCCER_BIN`` or the
+      repository's ``target/``) and stopped by :meth:`close`;
+    * ``host``/``port``: a running server. With ``admin_token`` every
+      ``reset`` creates a fresh match (so ``seed``, ``minutes`` and the
+      opponent apply); without it ``reset`` joins ``match_id`` (or the oldest
+      match with free slots for the team) as it is.
+
+    ``timeout`` bounds the wait for any one message from the server, in
+    seconds (``None``: no bound); raise it when the opponent is a slow client.
+
+    ``deadline_ms`` is the lockstep deadline of the matches this env
+    creates: by default the server's maximum (10 minutes), so that a learner
+    pausing for a gradient update does not have ticks played without it. A
+    client that disconnects frees the match at once (its robots then stand).
+
+    ``opponent``: ``"scripted"`` (the server's built-in team), ``"idle"``
+    (standing robots) or ``"client"`` (the match waits until another client,
+    e.g. a second env with ``team="red"``, has joined the other team: pass it
+    the ``match_id`` this env reports through ``on_match`` or
+    ``infos[...]["match_id"]``, or give both ``reset(options={"match_id": ...})``).
+    """
+
+    metadata = {"name": "naosoccer_v1", "render_modes": [], "is_parallelizable": True}
+
+    def __init__(
+        self,
+        *,
+        team: str = "blue",
+        opponent: str = "scripted",
+        minutes: Optional[float] = None,
+        seed: Optional[int] = None,
+        host: Optional[str] = None,
+        port: int = 7878,
+        token: Optional[str] = None,
+        admin_token: Optional[str] = None,
+        match_id: Optional[int] = None,
+        binary: Optional[str] = None,
+        server_args: Sequence[str] = (),
+        deadline_ms: Optional[int] = 600_000,
+        field: FieldScale = FieldScale(),
+        reward_weights: RewardWeights = RewardWeights(),
+        on_match: Optional[Callable[[int], None]] = None,
+        timeout: float = 120.0,
+    ) -> None:
+        if team not in protocol.TEAMS:
+            raise ValueError(f"team must be 'blue' or 'red', not {team!r}")
+        if opponent not in OPPONENTS:
+            raise ValueError(f"opponent must be one of {OPPONENTS}, not {opponent!r}")
+        self.team = team
+        self.opponent = opponent
+        self.minutes = minutes
+        self.deadline_ms = deadline_ms
+        self.field = field
+        self.reward_weights = reward_weights
+        self.on_match = on_match
+        self.timeout = timeout
+        self._next_seed = seed
+        self._match_id_option = match_id
+        self.possible_agents: List[str] = [f"{team}_{p}" for p in range(protocol.PLAYERS_PER_TEAM)]
+        self.agents: List[str] = []
+        self.render_mode = None
+        self._obs_space = spaces.Box(low=OBS_LOW, high=OBS_HIGH, shape=(OBS_DIM,), dtype=np.float32)
+        self._act_space = spaces.Discrete(len(protocol.ACTIONS))
+
+        self.server: Optional[LocalServer] = None
+        if host is None:
+            self.server = LocalServer(binary, args=list(server_args))
+            host, port = self.server.host, self.server.port
+            token = token or self.server.tokens[team]
+            admin_token = admin_token or self.server.tokens["admin"]
+        if token is None:
+            raise ValueError(f"connecting to {host}:{port} needs the {team} team's token")
+        self.host, self.port = host, port
+        self.token = token
+        self.admin_token = admin_token
+        self.client: Optional[Client] = None
+        self.match_id: Optional[int] = None
+        self.joined: Optional[Dict[str, Any]] = None
+        self._encoder = ObservationEncoder(field)
+        self._tick = 0
+        self._last: Optional[Dict[str, Any]] = None
+        self._last_vecs: List[np.ndarray] = []
+        self._in_match = False
+
+    # ------------------------------------------------------------ spaces
+
+    @functools.lru_cache(maxsize=None)
+    def observation_space(self, agent: str) -> spaces.Box:
+        return self._obs_space
+
+    @functools.lru_cache(maxsize=None)
+    def action_space(self, agent: str) -> spaces.Discrete:
+        return self._act_space
+
+    # ------------------------------------------------------------ episode
+
+    def reset(
+        self, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None
+    ) -> Tuple[Dict[str, np.ndarray], Dict[str, Dict[str, Any]]]:
+        """Starts a new match and returns the first observations.
+
+        ``seed`` seeds the new match when this env creates it; a reset
+        without one plays the seed after the previous match's (starting from
+        the constructor's ``seed``; with none at all the server picks).
+        ``options`` may hold ``"match_id"`` (join that match instead of
+        creating one) and ``"minutes"``.
+        """
+        options = options or {}
+        if seed is not None:
+            self._next_seed = seed
+            self._obs_space.seed(seed)
+            self._act_space.seed(seed)
+        match_seed = self._next_seed
+        if match_seed is not None:
+            # Later resets without a seed play the next seeds, not the same match again.
+            self._next_seed = match_seed + 1
+        self._leave()
+        if self.client is None or self.client.closed:
+            self.client = Client(self.host, self.port, timeout=self.timeout)
+        match_id = options.get("match_id", self._match_id_option)
+        if match_id is None and self.admin_token is not None:
+            two_clients = self.opponent == "client"
+            info = self.client.create_match(
+                self.admin_token,
+                seed=match_seed,
+                minutes=options.get("minutes", self.minutes),
+                mode="lockstep",
+                fill="idle" if self.opponent == "idle" else "scripted",
+                start_players=2 * protocol.PLAYERS_PER_TEAM if two_clients else protocol.PLAYERS_PER_TEAM,
+                deadline_ms=self.deadline_ms,
+            )
+            match_id = info["match_id"]
+        self.joined = self.client.join(self.team, self.token, range(protocol.PLAYERS_PER_TEAM), match_id)
+        self.match_id = int(self.joined["match_id"])
+        self._in_match = True
+        if self.on_match is not None:
+            self.on_match(self.match_id)
+        control_hz = float(self.joined["control_hz"])
+        self._encoder = ObservationEncoder(self.field, float(self.joined["total_ticks"]) / control_hz)
+        msg = self.client.recv()
+        if msg["type"] != "observation":
+            raise ProtocolError(f"expected the first observation of match {self.match_id}, got {msg['type']!r}")
+        self.agents = list(self.possible_agents)
+        self._take(msg)
+        obs = dict(zip(self.agents, self._last_vecs))
+        infos = {a: self._info(p, []) for p, a in enumerate(self.agents)}
+        return obs, infos
+
+    def step(self, actions: Dict[str, Any]) -> Tuple[
+        Dict[str, np.ndarray],
+        Dict[str, float],
+        Dict[str, bool],
+        Dict[str, bool],
+        Dict[str, Dict[str, Any]],
+    ]:
+        """Plays one control tick with ``actions`` (agent -> 0..4 or a name).
+
+        A live agent missing from ``actions`` stays (its action is sent as
+        ``stay``, so the lockstep server need not wait for its deadline). An
+        action the server rejects raises :class:`NaoSoccerError` with the
+        server's code; the env must then be ``reset``.
+        """
+        if not self.agents or self.client is None or self._last is None:
+            raise RuntimeError("step() needs a running episode: call reset() first (also after an error)")
+        pairs = [(p, actions.get(a, protocol.STAY)) for p, a in enumerate(self.possible_agents)]
+        self.client.send_actions(self._tick, pairs)
+        try:
+            msg = self.client.recv()
+        except (NaoSoccerError, ProtocolError):
+            # The server rejected the actions (the tick is then played
+            # without them) or the connection broke: the episode cannot go on
+            # in step with the server, so the next call must be reset().
+            self._last = None
+            raise
+        before = self._last
+        if msg["type"] == "observation":
+            self._take(msg)
+            after: Optional[Dict[str, Any]] = self._last
+            goals_for = after["score"]["own"] - before["score"]["own"]
+            goals_against = after["score"]["opponent"] - before["score"]["opponent"]
+            rew = team_rewards(self.reward_weights, after, goals_for, goals_against)
+            events = _events(before, after, goals_for, goals_against)
+            agents = self.agents
+            obs = dict(zip(agents, self._last_vecs))
+            rewards = dict(zip(agents, rew))
+            infos = {a: self._info(p, events) for p, a in enumerate(agents)}
+            done = dict.fromkeys(agents, False)
+            return obs, rewards, done, dict(done), infos
+        if msg["type"] == "match_end":
+            return self._finish(msg, before)
+        raise ProtocolError(f"unexpected {msg['type']!r} during match {self.match_id}")
+
+    def _finish(self, end: Dict[str, Any], before: Dict[str, Any]):
+        self._in_match = False
+        other = "red" if self.team == "blue" else "blue"
+        own, opp = end["score"][self.team], end["score"][other]
+        goals_for = own - before["score"]["own"]
+        goals_against = opp - before["score"]["opponent"]
+        rew = team_rewards(self.reward_weights, None, goals_for, goals_against)
+        events = _events(before, None, goals_for, goals_against)
+        # No observation follows the last tick; the last one stands in, with
+        # the clock at zero and the final score (copies: the caller may still
+        # hold the previous step's arrays).
+        vecs = [v.copy() for v in self._last_vecs]
+        for v in vecs:
+            v[_TIME] = 0.0
+            v[_SCORE] = min(own * SCORE_SCALE, OBS_HIGH[_SCORE])
+            v[_SCORE + 1] = min(opp * SCORE_SCALE, OBS_HIGH[_SCORE + 1])
+        agents = self.agents
+        obs = dict(zip(agents, vecs))
+        rewards = dict(zip(agents, rew))
+        shutdown = end.get("reason") == "shutdown"
+        terminations = dict.fromkeys(agents, not shutdown)
+        truncations = dict.fromkeys(agents, shutdown)
+        infos = {}
+        for p, a in enumerate(agents):
+            info = self._info(p, events)
+            info["score"] = {"own": own, "opponent": opp}
+            info["match_end"] = end
+            info["stats"] = end["stats"]
+            infos[a] = info
+        self.agents = []
+        return obs, rewards, terminations, truncations, infos
+
+    def _take(self, msg: Dict[str, Any]) -> None:
+        observations = msg["observations"]
+        if len(observations) != protocol.PLAYERS_PER_TEAM:
+            raise ProtocolError(f"expected {protocol.PLAYERS_PER_TEAM} observations, got {len(observations)}")
+        self._tick = int(msg["tick"])
+        self._last = observations[0]
+        self._last_vecs = self._encoder.encode_team(observations)
+
+    def _info(self, player: int, events: List[Dict[str, Any]]) -> Dict[str, Any]:
+        last = self._last or {}
+        control = last.get("control", [False] * protocol.PLAYERS_PER_TEAM)
+        if any(control):
+            possession: Optional[str] = "own"
+        elif last.get("opponent_control"):
+            possession = "opponent"
+        else:
+            possession = None
+        return {
+            "match_id": self.match_id,
+            "tick": self._tick,
+            "player": player,
+            "score": dict(last.get("score", {"own": 0, "opponent": 0})),
+            "possession": possession,
+            "controller": next((p for p, c in enumerate(control) if c), None),
+            "events": events,
+        }
+
+    # ------------------------------------------------------------ lifecycle
+
+    def _leave(self) -> None:
+        if self.client is not None and not self.client.closed and self._in_match:
+            try:
+                self.client.leave()
+            except (NaoSoccerError, ProtocolError):
+                # A broken connection is replaced on the next reset.
+                self.client.close()
+        self._in_match = False
+        self.agents = []
+
+    def close(self) -> None:
+        self._leave()
+        if self.client is not None:
+            self.client.close()
+            self.client = None
+        if self.server is not None:
+            self.server.stop()
+            self.server = None
+
+    def render(self) -> None:
+        return None
+
+    def state(self) -> np.ndarray:
+        return self._last_vecs[0].copy() if self._last_vecs else np.zeros(OBS_DIM, np.float32)
+
+
+def _events(
+    before: Dict[str, Any], after: Optional[Dict[str, Any]], goals_for: int, goals_against: int
+) -> List[Dict[str, Any]]:
+    """What changed during the tick, as far as observations show it.
+
+    The server pushes no referee events to clients (protocol 1.0); these are
+    derived from consecutive observations: goals (score changes), falls and
+    get-ups of own and opponent robots, and possession changes.
+    """
+    events: List[Dict[str, Any]] = []
+    events += [{"kind": "goal", "side": "own"}] * goals_for
+    events += [{"kind": "goal", "side": "opponent"}] * goals_against
+    if after is None:
+        return events
+    for side, key in (("own", "own"), ("opponent", "opponents")):
+        for p, (a, b) in enumerate(zip(before[key], after[key])):
+            if b["fallen"] and not a["fallen"]:
+                events.append({"kind": "fall", "side": side, "player": p})
+            elif a["fallen"] and not b["fallen"]:
+                events.append({"kind": "get_up", "side": side, "player": p})
+
+    def holder(o: Dict[str, Any]) -> Optional[Tuple[str, Optional[int]]]:
+        for p, c in enumerate(o["control"]):
+            if c:
+                return ("own", p)
+        return ("opponent", None) if o["opponent_control"] else None
+
+    h0, h1 = holder(before), holder(after)
+    if h0 != h1:
+        events.append(
+            {
+                "kind": "possession",
+                "side": h1[0] if h1 else None,
+                "player": h1[1] if h1 else None,
+            }
+        )
+    return events
