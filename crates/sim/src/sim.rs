@@ -1,0 +1,541 @@
+//! `Sim`: the world of `world.rs` plus the robots' controllers (gait, kick,
+//! balance), fall detection and the snapshot.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rapier3d::math::{Pose, Rot3, Vec3};
+use rapier3d::prelude::{ColliderHandle, PhysicsWorld, RigidBody, RigidBodyHandle};
+
+use crate::world::{build, default_robot_spot, standing_pose, ROBOT_TAG};
+use crate::{
+    BallState, Command, Kick, RobotModel, RobotState, SimConfig, SimError, Snapshot, ROBOTS,
+};
+
+/// Controller state of one robot.
+#[derive(Debug, Clone, Copy)]
+struct Ctrl {
+    command: Command,
+    fallen: bool,
+    /// Steps since the kick began, while kicking.
+    kick_phase: Option<u32>,
+    /// Gait noise drawn every `gait_noise_period`: yaw drift (rad/s) and
+    /// speed factor while walking.
+    drift: f32,
+    speed_factor: f32,
+    last_touch: Option<u64>,
+    /// A stumble in progress: direction of the fall and the step it began.
+    stumble: Option<(f32, f32, u64)>,
+}
+
+impl Default for Ctrl {
+    fn default() -> Self {
+        Ctrl {
+            command: Command::Stay,
+            fallen: false,
+            kick_phase: None,
+            drift: 0.0,
+            speed_factor: 1.0,
+            last_touch: None,
+            stumble: None,
+        }
+    }
+}
+
+/// A pitch with a ball and eight robots, stepped at a fixed `dt`.
+pub struct Sim {
+    cfg: SimConfig,
+    world: PhysicsWorld,
+    ball: RigidBodyHandle,
+    ball_collider: ColliderHandle,
+    robots: [RigidBodyHandle; ROBOTS],
+    ctrl: [Ctrl; ROBOTS],
+    rng: ChaCha8Rng,
+    seed: u64,
+    steps: u64,
+    snapshot: Snapshot,
+    strikes: [bool; ROBOTS],
+    // Derived from the model and config once.
+    torso_height: f32,
+    mass: f32,
+    yaw_inertia: f32,
+    windup_steps: u32,
+    kick_steps: u32,
+    noise_period_steps: u64,
+    stumble_steps: u64,
+}
+
+impl Sim {
+    /// Builds the pitch; robots stand on their own halves facing the centre
+    /// (robots 0..4 at negative x, 4..8 at positive x), the ball on the centre
+    /// spot. `seed` seeds the gait and kick noise of this match.
+    pub fn new(cfg: &SimConfig, model: &RobotModel, seed: u64) -> Result<Sim, SimError> {
+        let built = build(cfg, model)?;
+        let mp = model.mass_properties();
+        let yaw_inertia = mp.reconstruct_inertia_matrix().z_axis.z;
+        let steps_of = |s: f32| (s / cfg.dt).round() as u32;
+        let windup_steps = steps_of(cfg.kick_windup).max(1);
+        let mut sim = Sim {
+            cfg: cfg.clone(),
+            world: built.world,
+            ball: built.ball,
+            ball_collider: built.ball_collider,
+            robots: built.robots,
+            ctrl: [Ctrl::default(); ROBOTS],
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            seed,
+            steps: 0,
+            snapshot: Snapshot {
+                step: 0,
+                ball: BallState::default(),
+                robots: [RobotState::default(); ROBOTS],
+                kicks: Vec::with_capacity(ROBOTS),
+            },
+            strikes: [false; ROBOTS],
+            torso_height: model.torso_height(),
+            mass: mp.mass(),
+            yaw_inertia,
+            windup_steps,
+            kick_steps: windup_steps + steps_of(cfg.kick_recovery),
+            noise_period_steps: u64::from(steps_of(cfg.gait_noise_period).max(1)),
+            stumble_steps: u64::from(steps_of(1.0).max(1)),
+        };
+        sim.refresh_snapshot();
+        Ok(sim)
+    }
+
+    /// Physics step, seconds.
+    pub fn dt(&self) -> f32 {
+        self.cfg.dt
+    }
+
+    /// The config this sim was built with.
+    pub fn config(&self) -> &SimConfig {
+        &self.cfg
+    }
+
+    /// The seed of the match noise.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// Physics steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// Rigid bodies and colliders in the world.
+    pub fn counts(&self) -> (usize, usize) {
+        (self.world.bodies.len(), self.world.colliders.len())
+    }
+
+    /// Where robot `i` stands before anyone places it: (x, y, heading).
+    pub fn default_spot(&self, robot: usize) -> (f32, f32, f32) {
+        default_robot_spot(&self.cfg, robot)
+    }
+
+    /// Sets robot `robot`'s command; it holds until changed. A kick in
+    /// progress finishes first; a fallen robot keeps it for after it stands.
+    /// Panics if `robot >= ROBOTS`.
+    pub fn set_command(&mut self, robot: usize, cmd: Command) {
+        self.ctrl[robot].command = cmd;
+        self.snapshot.robots[robot].command = cmd;
+    }
+
+    /// The last snapshot (after the last step or placement).
+    pub fn snapshot(&self) -> &Snapshot {
+        &self.snapshot
+    }
+
+    /// One physics step of `dt`:
+    ///
+    /// - gait noise is redrawn every `gait_noise_period` (robot order);
+    /// - each standing robot's legs push with a horizontal force, applied at
+    ///   the ground under its centre of mass and capped at `drive_force`,
+    ///   toward its target velocity (`forward`: heading x walk speed, else
+    ///   zero); a capped yaw torque tracks its target yaw rate (turns, or the
+    ///   drift while walking); a capped upright torque resists tilt;
+    /// - a robot walking against another (held under half its speed with
+    ///   another torso within `stumble_distance` ahead) stumbles with
+    ///   probability `dt / stumble_time` a step, and is thrown over;
+    /// - a kick strikes once its wind-up is over: the ball moves only if its
+    ///   centre lies within the kick's reach in front of the robot;
+    /// - rapier steps; a robot tilted past `fall_tilt` has fallen; a slow
+    ///   ball on the ground stops.
+    pub fn step(&mut self) {
+        self.snapshot.kicks.clear();
+        if self.steps % self.noise_period_steps == 0 {
+            self.draw_gait_noise();
+        }
+        let cfg = &self.cfg;
+        let dt = cfg.dt;
+        let mut at = [Vec3::ZERO; ROBOTS];
+        for (p, h) in at.iter_mut().zip(&self.robots) {
+            *p = self.world.bodies[*h].translation();
+        }
+        for i in 0..ROBOTS {
+            let c = &mut self.ctrl[i];
+            let body = &mut self.world.bodies[self.robots[i]];
+            body.reset_forces(false);
+            body.reset_torques(false);
+            self.strikes[i] = false;
+            if c.fallen {
+                if let Some((x, y, since)) = c.stumble {
+                    // Throw the body over until it is well past its balance
+                    // limit (or give up after a second, leaning on something).
+                    if tilt_of(body.rotation()) < 2.0 * cfg.fall_tilt
+                        && self.steps - since < self.stumble_steps
+                    {
+                        let axis = Vec3::Z.cross(Vec3::new(x, y, 0.0));
+                        body.add_torque(axis * cfg.stumble_torque, true);
+                    } else {
+                        c.stumble = None;
+                        // Held up by whatever it leant on: it caught itself.
+                        if tilt_of(body.rotation()) < cfg.fall_tilt {
+                            c.fallen = false;
+                        }
+                    }
+                }
+                continue;
+            }
+            if c.kick_phase.is_none() && c.command == Command::Shoot {
+                c.kick_phase = Some(0);
+            }
+            let (target_v, target_w) = match (c.kick_phase, c.command) {
+                (Some(_), _) => (0.0, 0.0),
+                (None, Command::Forward) => (cfg.walk_speed * c.speed_factor, c.drift),
+                (None, Command::TurnLeft) => (0.0, cfg.turn_speed),
+                (None, Command::TurnRight) => (0.0, -cfg.turn_speed),
+                (None, Command::Stay | Command::Shoot) => (0.0, 0.0),
+            };
+            if let Some(phase) = c.kick_phase.as_mut() {
+                *phase += 1;
+                if *phase == self.windup_steps {
+                    self.strikes[i] = true;
+                }
+                if *phase >= self.kick_steps {
+                    c.kick_phase = None;
+                }
+            }
+            if c.kick_phase.is_none()
+                && c.command == Command::Forward
+                && cfg.stumble_time > 0.0
+                && obstructed(body, &at, i, target_v, cfg.stumble_distance)
+                && self.rng.random::<f32>() < dt / cfg.stumble_time
+            {
+                // The gait stumbles: the controller lets go and the robot
+                // topples backward or sideways, away from what blocks it.
+                let away = self.rng.random_range(-1.2f32..=1.2);
+                let h = heading_of(body.rotation()) + std::f32::consts::PI + away;
+                c.stumble = Some((h.cos(), h.sin(), self.steps));
+                c.fallen = true;
+                continue;
+            }
+            drive(body, cfg, self.mass, self.yaw_inertia, target_v, target_w);
+        }
+        for i in 0..ROBOTS {
+            if self.strikes[i] {
+                self.strike(i);
+            }
+        }
+
+        self.world.step();
+        self.steps += 1;
+
+        // Fall detection, ball rest and touches, then the snapshot.
+        for i in 0..ROBOTS {
+            let body = &self.world.bodies[self.robots[i]];
+            if !self.ctrl[i].fallen && tilt_of(body.rotation()) > self.cfg.fall_tilt {
+                self.ctrl[i].fallen = true;
+                self.ctrl[i].kick_phase = None;
+            }
+        }
+        let r = self.cfg.ball_radius;
+        let rest = self.cfg.ball_rest_speed;
+        let ball = &mut self.world.bodies[self.ball];
+        if ball.translation().z < r * 1.1 && ball.linvel().length() < rest && ball.is_moving() {
+            ball.set_linvel(Vec3::ZERO, false);
+            ball.set_angvel(Vec3::ZERO, false);
+        }
+        let step = self.steps;
+        for pair in self
+            .world
+            .narrow_phase
+            .contact_pairs_with(self.ball_collider)
+        {
+            if !pair.has_any_active_contact() {
+                continue;
+            }
+            let other = if pair.collider1 == self.ball_collider {
+                pair.collider2
+            } else {
+                pair.collider1
+            };
+            if let Some(co) = self.world.colliders.get(other) {
+                let tag = co.user_data;
+                if tag & ROBOT_TAG != 0 {
+                    let i = (tag & 0xff) as usize;
+                    if i < ROBOTS {
+                        self.ctrl[i].last_touch = Some(step);
+                    }
+                }
+            }
+        }
+        self.refresh_snapshot();
+    }
+
+    /// Puts the ball at rest on the ground at `(x, y)`.
+    pub fn place_ball(&mut self, x: f32, y: f32) {
+        let r = self.cfg.ball_radius;
+        let ball = &mut self.world.bodies[self.ball];
+        ball.set_position(Pose::from_translation(Vec3::new(x, y, r)), true);
+        ball.set_linvel(Vec3::ZERO, true);
+        ball.set_angvel(Vec3::ZERO, true);
+        self.refresh_snapshot();
+    }
+
+    /// Sets the ball rolling on the ground at `(vx, vy)` m/s.
+    pub fn set_ball_velocity(&mut self, vx: f32, vy: f32) {
+        let ball = &mut self.world.bodies[self.ball];
+        let v = Vec3::new(vx, vy, 0.0);
+        ball.set_linvel(v, true);
+        self.refresh_snapshot();
+    }
+
+    /// Stands robot `robot` upright at rest at `(x, y)` facing `heading`;
+    /// clears a fall and any kick in progress.
+    pub fn place_robot(&mut self, robot: usize, x: f32, y: f32, heading: f32) {
+        let pose = standing_pose(self.torso_height, x, y, heading);
+        let body = &mut self.world.bodies[self.robots[robot]];
+        body.set_position(pose, true);
+        body.set_linvel(Vec3::ZERO, true);
+        body.set_angvel(Vec3::ZERO, true);
+        let c = &mut self.ctrl[robot];
+        c.fallen = false;
+        c.kick_phase = None;
+        c.stumble = None;
+        self.refresh_snapshot();
+    }
+
+    /// Stands robot `robot` upright where it lies (torso x, y), keeping its
+    /// heading, at rest.
+    pub fn stand_up(&mut self, robot: usize) {
+        let body = &self.world.bodies[self.robots[robot]];
+        let t = body.translation();
+        let heading = heading_of(body.rotation());
+        self.place_robot(robot, t.x, t.y, heading);
+    }
+
+    /// An impulse (N s, world frame) on robot `robot`'s torso origin.
+    pub fn push_robot(&mut self, robot: usize, impulse: [f32; 3]) {
+        let body = &mut self.world.bodies[self.robots[robot]];
+        let at = body.translation();
+        body.apply_impulse_at_point(Vec3::from_array(impulse), at, true);
+        self.refresh_snapshot();
+    }
+
+    /// FNV-1a over the raw bits of every dynamic body's pose and velocity,
+    /// the controllers' state and the noise RNG's seed and position. Equal
+    /// on the same build for the same config, seed and commands.
+    pub fn state_hash(&self) -> u64 {
+        let mut h = Fnv::new();
+        h.u64(self.steps);
+        let mut body = |b: &RigidBody| {
+            let p = b.position();
+            h.vec(p.translation);
+            h.f32s(&p.rotation.to_array());
+            h.vec(b.linvel());
+            h.vec(b.angvel());
+        };
+        body(&self.world.bodies[self.ball]);
+        for &r in &self.robots {
+            body(&self.world.bodies[r]);
+        }
+        for c in &self.ctrl {
+            h.u64(c.command as u64);
+            h.u64(u64::from(c.fallen));
+            h.u64(c.kick_phase.map_or(u64::MAX, u64::from));
+            h.f32s(&[c.drift, c.speed_factor]);
+            h.u64(c.last_touch.unwrap_or(u64::MAX));
+            let (x, y, since) = c.stumble.unwrap_or((0.0, 0.0, u64::MAX));
+            h.f32s(&[x, y]);
+            h.u64(since);
+        }
+        for b in self.rng.get_seed() {
+            h.byte(b);
+        }
+        let pos = self.rng.get_word_pos();
+        h.u64(pos as u64);
+        h.u64((pos >> 64) as u64);
+        h.finish()
+    }
+
+    fn draw_gait_noise(&mut self) {
+        let (drift, speed) = (self.cfg.gait_drift_rate, self.cfg.gait_speed_noise);
+        for c in &mut self.ctrl {
+            c.drift = drift * self.rng.random_range(-1.0f32..=1.0);
+            c.speed_factor = 1.0 + speed * self.rng.random_range(-1.0f32..=1.0);
+        }
+    }
+
+    /// The strike of robot `i`'s kick.
+    fn strike(&mut self, i: usize) {
+        // Draw first, hit or miss, so the RNG stream does not depend on
+        // where the ball happens to be.
+        let speed_err = self.rng.random_range(-1.0f32..=1.0);
+        let angle_err = self.rng.random_range(-1.0f32..=1.0);
+        let cfg = &self.cfg;
+        let robot = &self.world.bodies[self.robots[i]];
+        let heading = heading_of(robot.rotation());
+        let fwd = Vec3::new(heading.cos(), heading.sin(), 0.0);
+        let left = Vec3::new(-fwd.y, fwd.x, 0.0);
+        let rel = self.world.bodies[self.ball].translation() - robot.translation();
+        let (ahead, side) = (rel.dot(fwd), rel.dot(left));
+        let ball_z = self.world.bodies[self.ball].translation().z;
+        let in_reach = ahead >= cfg.kick_reach_min
+            && ahead <= cfg.kick_reach_max
+            && side.abs() <= cfg.kick_half_width
+            && ball_z < cfg.ball_radius * 2.5;
+        if !in_reach {
+            return;
+        }
+        let speed = cfg.kick_speed * (1.0 + cfg.kick_speed_noise * speed_err);
+        let dir = heading + cfg.kick_angle_noise * angle_err;
+        let v = Vec3::new(dir.cos(), dir.sin(), 0.0) * speed;
+        self.world.bodies[self.ball].set_linvel(v, true);
+        self.snapshot.kicks.push(Kick { robot: i, speed });
+        self.ctrl[i].last_touch = Some(self.steps + 1);
+    }
+
+    fn refresh_snapshot(&mut self) {
+        self.snapshot.step = self.steps;
+        let ball = &self.world.bodies[self.ball];
+        self.snapshot.ball = BallState {
+            pos: ball.translation().to_array(),
+            vel: ball.linvel().to_array(),
+        };
+        for i in 0..ROBOTS {
+            let body = &self.world.bodies[self.robots[i]];
+            let c = &self.ctrl[i];
+            self.snapshot.robots[i] = RobotState {
+                pos: body.translation().to_array(),
+                heading: heading_of(body.rotation()),
+                tilt: tilt_of(body.rotation()),
+                vel: body.linvel().to_array(),
+                fallen: c.fallen,
+                kicking: c.kick_phase.is_some(),
+                last_ball_touch_step: c.last_touch,
+                command: c.command,
+            };
+        }
+    }
+}
+
+/// The legs: bounded horizontal force toward the target velocity (applied at
+/// the ground under the centre of mass, so a braking or pushing robot feels
+/// the tipping torque a real one would), bounded yaw torque toward the target
+/// yaw rate, bounded upright-keeping torque.
+fn drive(
+    body: &mut RigidBody,
+    cfg: &SimConfig,
+    mass: f32,
+    yaw_inertia: f32,
+    target_speed: f32,
+    target_yaw_rate: f32,
+) {
+    let rot = *body.rotation();
+    let heading = heading_of(&rot);
+    let target = Vec3::new(heading.cos(), heading.sin(), 0.0) * target_speed;
+    let v = body.linvel();
+    let err = Vec3::new(target.x - v.x, target.y - v.y, 0.0);
+    let force = clamp_len(err * (mass / cfg.drive_time_constant), cfg.drive_force);
+    let com = body.center_of_mass();
+    body.add_force_at_point(force, Vec3::new(com.x, com.y, 0.0), true);
+
+    let w = body.angvel();
+    let yaw = ((target_yaw_rate - w.z) * yaw_inertia / cfg.turn_time_constant)
+        .clamp(-cfg.turn_torque, cfg.turn_torque);
+    // Rotation taking the body's up axis to the vertical, as an axis-angle.
+    let up = rot * Vec3::Z;
+    let axis = up.cross(Vec3::Z);
+    let s = axis.length();
+    let tilt_vec = if s > 1e-6 {
+        axis * (up.z.clamp(-1.0, 1.0).acos() / s)
+    } else {
+        Vec3::ZERO
+    };
+    let w_h = Vec3::new(w.x, w.y, 0.0);
+    let upright = clamp_len(
+        tilt_vec * cfg.balance_stiffness - w_h * cfg.balance_damping,
+        cfg.balance_torque,
+    );
+    body.add_torque(upright + Vec3::new(0.0, 0.0, yaw), true);
+}
+
+/// Walking but held back (under half the target speed) by another robot
+/// close in front.
+fn obstructed(body: &RigidBody, at: &[Vec3; ROBOTS], me: usize, target: f32, reach: f32) -> bool {
+    let heading = heading_of(body.rotation());
+    let fwd = Vec3::new(heading.cos(), heading.sin(), 0.0);
+    if body.linvel().dot(fwd) >= 0.5 * target {
+        return false;
+    }
+    let p = at[me];
+    at.iter().enumerate().any(|(j, q)| {
+        let d = Vec3::new(q.x - p.x, q.y - p.y, 0.0);
+        j != me && d.length_squared() < reach * reach && d.dot(fwd) > 0.0
+    })
+}
+
+fn clamp_len(v: Vec3, max: f32) -> Vec3 {
+    let l = v.length();
+    if l > max {
+        v * (max / l)
+    } else {
+        v
+    }
+}
+
+/// The direction the body points along the ground: its forward axis, or for
+/// a body pitched far over, its up axis (fallen forward) or the reverse of
+/// it (fallen backward), blended smoothly.
+pub(crate) fn heading_of(rot: &Rot3) -> f32 {
+    let fwd = *rot * Vec3::X;
+    let up = *rot * Vec3::Z;
+    let x = fwd.x - fwd.z * up.x;
+    let y = fwd.y - fwd.z * up.y;
+    y.atan2(x)
+}
+
+pub(crate) fn tilt_of(rot: &Rot3) -> f32 {
+    (*rot * Vec3::Z).z.clamp(-1.0, 1.0).acos()
+}
+
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn byte(&mut self, b: u8) {
+        self.0 ^= u64::from(b);
+        self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    fn u64(&mut self, v: u64) {
+        for b in v.to_le_bytes() {
+            self.byte(b);
+        }
+    }
+    fn f32s(&mut self, v: &[f32]) {
+        for x in v {
+            for b in x.to_bits().to_le_bytes() {
+                self.byte(b);
+            }
+        }
+    }
+    fn vec(&mut self, v: Vec3) {
+        self.f32s(&v.to_array());
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
