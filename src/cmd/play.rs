@@ -1,9 +1,348 @@
-//! `naosoccer match`: a whole match in process.
+//! `naosoccer match`: a whole match in process; and `bench sim`, which times
+//! one against the bare physics floor.
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
 use clap::Args;
+use naosoccer::runner::{self, MatchOutcome};
+use naosoccer_client::PolicyKind;
+use naosoccer_proto::{Action, Event, TeamStats, ROBOTS};
+use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RecordingSummary};
+use naosoccer_referee::{Match, MatchConfig};
+use naosoccer_sim::{BareWorld, RobotModel};
 
 #[derive(Args, Debug)]
-pub struct MatchArgs {}
+#[command(after_help = "\
+With --json, stdout holds exactly one JSON object:
+  {\"seed\", \"ticks\", \"sim_seconds\", \"wall_seconds\",
+   \"score\": {\"blue\", \"red\"},
+   \"stats\": {\"blue\": {\"goals\", \"control_rate\", \"passes\", \"shots\", \"falls\", \"out_of_bounds\"}, \"red\": {...}},
+   \"state_hash\"}
+state_hash is the final match state's hash as 16 hex digits: the same seed,
+config and policies give the same hash on the same build.
 
-pub fn run(_args: MatchArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`match` is being built")
+Statistics: control_rate is the share of the ticks in which any team controlled
+the ball (the paper's if_c) that this team did; a pass is possession moving
+between teammates after a kick by the first; shots count every kick that moved
+the ball; out_of_bounds counts the team's robots that left the field and the
+balls it put out (last touch).")]
+pub struct MatchArgs {
+    /// Match seed: with the same config and policies, the same seed plays the
+    /// same match (gait and kick noise, random policies).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Match configuration (TOML; fields left out keep their defaults, see
+    /// assets/match.toml).
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Blue's policy, one instance per robot: scripted (the paper's
+    /// rule-based team), random or idle.
+    #[arg(long, default_value = "scripted", value_name = "POLICY")]
+    blue: PolicyKind,
+    /// Red's policy: scripted, random or idle.
+    #[arg(long, default_value = "scripted", value_name = "POLICY")]
+    red: PolicyKind,
+    /// Match length in minutes of game time (overrides the config).
+    #[arg(long, value_name = "M")]
+    minutes: Option<f32>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Record the match to this MCAP file (docs/RECORDINGS.md); `naosoccer
+    /// replay FILE` re-simulates it.
+    #[arg(long, value_name = "FILE.mcap")]
+    record: Option<PathBuf>,
+}
+
+fn load_config(path: Option<&PathBuf>, minutes: Option<f32>) -> anyhow::Result<MatchConfig> {
+    let mut cfg = match path {
+        Some(p) => MatchConfig::from_file(p)?,
+        None => MatchConfig::default(),
+    };
+    if let Some(m) = minutes {
+        cfg.minutes = m;
+        cfg.validate().context("--minutes")?;
+    }
+    Ok(cfg)
+}
+
+pub fn run(args: MatchArgs) -> anyhow::Result<()> {
+    let cfg = load_config(args.config.as_ref(), args.minutes)?;
+    let show_progress = std::io::stdout().is_terminal();
+    let mut last_shown = 0;
+    let mut recording = match &args.record {
+        Some(path) => Some(MatchRecording::start(path, &cfg, &args)?),
+        None => None,
+    };
+    let outcome = runner::play_match_with(
+        &cfg,
+        args.seed,
+        &args.blue,
+        &args.red,
+        |m, actions, events| {
+            if let Some(r) = &mut recording {
+                r.tick(m, actions, events);
+            }
+            // About once a game minute; enough to see it move, cheap to print.
+            if show_progress && (m.tick() - last_shown >= 600 || m.is_finished()) {
+                last_shown = m.tick();
+                let (b, r) = m.score();
+                let mut err = std::io::stderr().lock();
+                let _ = write!(
+                    err,
+                    "\r{:>5.1}/{:.1} min  blue {b} - {r} red ",
+                    m.sim_seconds() / 60.0,
+                    m.total_ticks() as f64 / f64::from(cfg.control_hz) / 60.0
+                );
+                if m.is_finished() {
+                    let _ = writeln!(err);
+                }
+            }
+        },
+    )?;
+    let recorded = match recording {
+        Some(r) => Some(r.report()?),
+        None => None,
+    };
+    if args.json {
+        let mut json = outcome.to_json();
+        if let Some(r) = &recorded {
+            json["recording"] = serde_json::to_value(r)?;
+        }
+        println!("{json}");
+    } else {
+        print_table(&args, &outcome);
+        if let Some(r) = &recorded {
+            println!("recorded to {} ({} bytes)", r.path.display(), r.bytes);
+        }
+    }
+    Ok(())
+}
+
+/// `--record`: the recorder of an in-process match. The runner owns the
+/// match, so the recording is finished from the last tick's callback.
+struct MatchRecording {
+    path: PathBuf,
+    rec: Option<Recorder<std::fs::File>>,
+    summary: Option<RecordingSummary>,
+    error: Option<anyhow::Error>,
+}
+
+#[derive(serde::Serialize)]
+struct RecordingReport {
+    path: PathBuf,
+    bytes: u64,
+    messages: std::collections::BTreeMap<String, u64>,
+}
+
+impl MatchRecording {
+    fn start(path: &std::path::Path, cfg: &MatchConfig, args: &MatchArgs) -> anyhow::Result<Self> {
+        let m = Match::new(cfg, args.seed)?;
+        let meta = MatchMeta {
+            format: naosoccer_record::RECORDING_FORMAT,
+            naosoccer_version: env!("CARGO_PKG_VERSION").into(),
+            seed: args.seed,
+            config: cfg.clone(),
+            blue: args.blue.to_string(),
+            red: args.red.to_string(),
+            source: "match".into(),
+            match_id: None,
+            mode: None,
+            control_hz: cfg.control_hz,
+            total_ticks: m.total_ticks(),
+        };
+        let rec = Recorder::create(path, &meta, &m, RecorderOptions::default())
+            .with_context(|| format!("creating {}", path.display()))?;
+        Ok(MatchRecording {
+            path: path.to_owned(),
+            rec: Some(rec),
+            summary: None,
+            error: None,
+        })
+    }
+
+    fn tick(&mut self, m: &Match, actions: &[Action; ROBOTS], events: &[Event]) {
+        let Some(rec) = &mut self.rec else { return };
+        let r = rec.tick(m, actions, events);
+        let r = r.and_then(|()| {
+            if m.is_finished() {
+                let rec = self.rec.take().expect("recorder present");
+                self.summary = Some(rec.finish(m)?.0);
+            }
+            Ok(())
+        });
+        if let Err(e) = r {
+            self.rec = None;
+            self.error = Some(
+                anyhow::Error::new(e).context(format!("recording to {}", self.path.display())),
+            );
+        }
+    }
+
+    fn report(self) -> anyhow::Result<RecordingReport> {
+        if let Some(e) = self.error {
+            return Err(e);
+        }
+        let summary = self
+            .summary
+            .context("the match ended before the recording was finished")?;
+        let bytes = std::fs::metadata(&self.path)?.len();
+        Ok(RecordingReport {
+            path: self.path,
+            bytes,
+            messages: summary.messages,
+        })
+    }
+}
+
+fn print_table(args: &MatchArgs, o: &MatchOutcome) {
+    println!(
+        "naosoccer match: seed {}, {} (blue) vs {} (red)",
+        o.seed, args.blue, args.red
+    );
+    println!("final score: blue {} - {} red", o.score.blue, o.score.red);
+    println!();
+    println!("{:<16}{:>10}{:>10}", "", "blue", "red");
+    let row = |name: &str, f: &dyn Fn(&TeamStats) -> String| {
+        println!(
+            "{:<16}{:>10}{:>10}",
+            name,
+            f(&o.stats.blue),
+            f(&o.stats.red)
+        );
+    };
+    row("goals", &|t| t.goals.to_string());
+    row("ball control", &|t| {
+        format!("{:.1}%", 100.0 * t.control_rate)
+    });
+    row("passes", &|t| t.passes.to_string());
+    row("shots", &|t| t.shots.to_string());
+    row("falls", &|t| t.falls.to_string());
+    row("out of bounds", &|t| t.out_of_bounds.to_string());
+    println!();
+    println!(
+        "{} ticks, {:.1} s of game time in {:.2} s ({:.0}x real time), {} events; state hash {:016x}",
+        o.ticks,
+        o.sim_seconds,
+        o.wall_seconds,
+        o.sim_seconds / o.wall_seconds.max(1e-9),
+        o.events,
+        o.state_hash
+    );
+}
+
+#[derive(Args, Debug)]
+pub struct BenchSimArgs {
+    /// Seed of the timed match.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Match configuration (TOML); the default is assets/match.toml.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Match length in minutes of game time (overrides the config).
+    #[arg(long, value_name = "M")]
+    minutes: Option<f32>,
+}
+
+pub fn bench_sim(args: BenchSimArgs) -> anyhow::Result<()> {
+    let cfg = load_config(args.config.as_ref(), args.minutes)?;
+    if cfg!(debug_assertions) {
+        eprintln!(
+            "warning: a debug build; run `cargo run --release -- bench sim` for real figures"
+        );
+    }
+    // The match decides how many physics steps the floor takes.
+    let probe = Match::new(&cfg, args.seed)?;
+    let steps = probe.total_ticks() * u64::from(probe.steps_per_tick());
+    let dt = probe.sim().dt();
+    drop(probe);
+    let game_seconds = steps as f64 * f64::from(dt);
+
+    let model = RobotModel::builtin()?;
+    let mut bare = BareWorld::new(&cfg.sim, &model)?;
+    let start = Instant::now();
+    for _ in 0..steps {
+        bare.step();
+    }
+    let floor = start.elapsed().as_secs_f64();
+
+    let scripted = PolicyKind::Scripted;
+    let outcome = runner::play_match(&cfg, args.seed, &scripted, &scripted, |_| {})?;
+    let full = outcome.wall_seconds;
+
+    println!(
+        "bench sim: {steps} physics steps of {:.4} s = {:.0} s of game time ({} ticks at {} Hz)",
+        dt, game_seconds, outcome.ticks, cfg.control_hz
+    );
+    println!(
+        "{:<44}{:>10}{:>14}{:>14}",
+        "", "wall s", "steps/s", "x real time"
+    );
+    let line = |name: &str, secs: f64| {
+        println!(
+            "{:<44}{:>10.3}{:>14.0}{:>14.0}",
+            name,
+            secs,
+            steps as f64 / secs.max(1e-9),
+            game_seconds / secs.max(1e-9)
+        );
+    };
+    // The same match again, recorded to MCAP in memory (what `--record`
+    // and the server add).
+    let m = Match::new(&cfg, args.seed)?;
+    let meta = MatchMeta {
+        format: naosoccer_record::RECORDING_FORMAT,
+        naosoccer_version: env!("CARGO_PKG_VERSION").into(),
+        seed: args.seed,
+        config: cfg.clone(),
+        blue: scripted.to_string(),
+        red: scripted.to_string(),
+        source: "match".into(),
+        match_id: None,
+        mode: None,
+        control_hz: cfg.control_hz,
+        total_ticks: m.total_ticks(),
+    };
+    let start = Instant::now();
+    let mut rec = Some(Recorder::new(
+        std::io::Cursor::new(Vec::with_capacity(8 << 20)),
+        &meta,
+        &m,
+        RecorderOptions::default(),
+    )?);
+    let mut bytes = 0;
+    let policies = runner::build_policies(args.seed, &scripted, &scripted);
+    let recorded = runner::run_to_end_with(m, policies, |m, actions, events| {
+        if let Some(r) = &mut rec {
+            r.tick(m, actions, events).expect("recording to memory");
+            if m.is_finished() {
+                let (_, cursor) = rec.take().unwrap().finish(m).expect("finishing in memory");
+                bytes = cursor.into_inner().len();
+            }
+        }
+    });
+    let with_recording = start.elapsed().as_secs_f64();
+    anyhow::ensure!(
+        recorded.state_hash == outcome.state_hash,
+        "recording changed the match (state hash {:016x} vs {:016x})",
+        recorded.state_hash,
+        outcome.state_hash
+    );
+
+    line("bare rapier floor (same bodies, bare driving)", floor);
+    line("full match (physics+referee+scripted x8)", full);
+    line("full match, recorded to MCAP", with_recording);
+    println!("match / floor: {:.2}x", full / floor.max(1e-9));
+    println!(
+        "recording overhead: {:+.1}% ({:.1} MB for the match)",
+        100.0 * (with_recording / full.max(1e-9) - 1.0),
+        bytes as f64 / 1e6
+    );
+    println!(
+        "match result: blue {} - {} red, state hash {:016x}",
+        outcome.score.blue, outcome.score.red, outcome.state_hash
+    );
+    Ok(())
 }

@@ -1,5 +1,14 @@
-//! Rules over sim state and `Match`, the one driver used by the server, the
+//! Rules over sim state and [`Match`], the one driver used by the server, the
 //! in-process runner and training alike.
+//!
+//! - [`rules`]: one type per rule (clock, kick-off, goal, out of bounds, fall,
+//!   possession, pass), each a function of a sim snapshot and the tick that
+//!   returns events and commands; rules never touch the sim.
+//! - [`Match`]: maps the eight robots' actions to sim commands, steps physics
+//!   for one control tick, runs the rules, applies their commands, keeps the
+//!   score and statistics (derived from the event stream) and builds each
+//!   player's observation, mirrored so every team attacks +x.
+//! - [`MatchConfig`]: the whole match in one TOML file (`assets/match.toml`).
 //!
 //! API CONTRACT (used by server, learn, the CLI; keep these signatures):
 //! ```ignore
@@ -20,3 +29,20 @@
 //!     pub fn rewards(&self, team: Team) -> [f32; 4]; // per-robot reward of the last tick (learn's MDP)
 //! }
 //! ```
+//! Also: `Match::sim_seconds`, `steps_per_tick`, `field`, `is_down`, `up_at`;
+//! `MatchConfig::validate` / `to_toml_string`; `blank_observation()`;
+//! `log_compress`.
+
+pub mod config;
+mod game;
+mod observe;
+pub mod rules;
+mod sim_glue;
+
+pub use config::{ConfigError, MatchConfig, Placement, RewardConfig, RulesConfig};
+pub use game::{log_compress, Match, MatchError};
+pub use observe::blank_observation;
+pub use rules::{Command, Field};
+
+/// The default configuration file, as shipped (`assets/match.toml`).
+pub const DEFAULT_CONFIG_TOML: &str = include_str!("../../../assets/match.toml");

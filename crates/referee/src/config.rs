@@ -1,0 +1,286 @@
+//! The match configuration: one TOML file (`assets/match.toml`) with the
+//! sections `[match]`, `[rules]`, `[reward]` and `[sim]`. Every field has the
+//! paper's value (or ours, where the paper gives none) as its default, so a
+//! file only needs the fields it changes.
+
+use std::path::{Path, PathBuf};
+
+use naosoccer_proto::PLAYERS_PER_TEAM;
+use naosoccer_sim::SimConfig;
+use serde::{Deserialize, Serialize};
+
+/// Everything that decides a match, apart from the seed and the actions.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(from = "MatchConfigFile", into = "MatchConfigFile")]
+pub struct MatchConfig {
+    /// Physics: pitch, goals, ball, robots, gait and kick (the sim crate's own section).
+    pub sim: SimConfig,
+    pub rules: RulesConfig,
+    pub reward: RewardConfig,
+    /// Match length in minutes of game time.
+    pub minutes: f32,
+    /// Control ticks a second: how often every robot decides an action.
+    pub control_hz: f32,
+}
+
+impl Default for MatchConfig {
+    fn default() -> Self {
+        MatchConfigFile::default().into()
+    }
+}
+
+/// A robot's place in its team's frame (own goal at -x): x, y in metres and
+/// heading in radians (0 faces the opponent goal).
+pub type Placement = [f32; 3];
+
+/// The referee's parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RulesConfig {
+    /// The paper's `b_d`: a robot controls the ball only when the horizontal
+    /// distance from its torso to the ball is under this (metres).
+    pub b_d: f32,
+    /// The paper's `b_rad`: ... and the ball lies within this angle of its
+    /// heading (radians).
+    pub b_rad: f32,
+    /// The paper's "stand up cost": seconds a fallen robot lies before it is
+    /// stood up again.
+    pub standup_seconds: f32,
+    /// A robot whose torso is lower than this (metres) has fallen (the paper's test).
+    pub fall_height: f32,
+    /// ... or whose torso tilts further than this from upright (radians).
+    pub fall_tilt: f32,
+    /// An out ball is put back this far inside the nearest line (metres).
+    pub ball_inset: f32,
+    /// A robot is out when its torso is further than this outside a line (metres).
+    pub robot_out_margin: f32,
+    /// Where each player stands when its team kicks off (player 0 first).
+    pub kickoff_attack: [Placement; PLAYERS_PER_TEAM],
+    /// Where each player stands when the other team kicks off; also where a
+    /// robot that left the field is reset to.
+    pub kickoff_defend: [Placement; PLAYERS_PER_TEAM],
+}
+
+impl Default for RulesConfig {
+    fn default() -> Self {
+        RulesConfig {
+            b_d: 0.3,
+            b_rad: 0.4,
+            standup_seconds: 5.0,
+            fall_height: 0.2,
+            fall_tilt: 0.5,
+            ball_inset: 0.2,
+            robot_out_margin: 0.3,
+            kickoff_attack: [
+                [-2.6, 0.0, 0.0],
+                [-0.3, 0.0, 0.0],
+                [-1.0, 1.2, 0.0],
+                [-1.2, -1.0, 0.0],
+            ],
+            kickoff_defend: [
+                [-2.6, 0.0, 0.0],
+                [-1.0, 0.0, 0.0],
+                [-1.5, 1.2, 0.0],
+                [-1.8, -1.0, 0.0],
+            ],
+        }
+    }
+}
+
+/// Weights of the per-robot reward (learn's MDP):
+/// `s = r_goal + r_close + r_control`, reward `sign(s) * ln(1 + |s|)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RewardConfig {
+    /// Added for every robot of a team that scored this tick, subtracted when it conceded.
+    pub goal: f32,
+    /// Closeness to the ball: `close * exp(-distance / close_scale)`.
+    pub close: f32,
+    /// Metres over which closeness decays.
+    pub close_scale: f32,
+    /// Added to the robot that controls the ball.
+    pub control: f32,
+    /// Subtracted from every robot of a team whose opponent controls the ball.
+    pub opponent_control: f32,
+}
+
+impl Default for RewardConfig {
+    fn default() -> Self {
+        RewardConfig {
+            goal: 10.0,
+            close: 0.1,
+            close_scale: 1.0,
+            control: 0.5,
+            opponent_control: 0.2,
+        }
+    }
+}
+
+/// Why a configuration was refused.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    #[error("cannot read match config {path}: {source}")]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("invalid match config: {0}")]
+    Parse(#[from] toml::de::Error),
+    #[error("invalid match config: `{field}` {reason}")]
+    Invalid { field: &'static str, reason: String },
+}
+
+impl MatchConfig {
+    /// Parses and validates a TOML configuration; missing fields take their defaults.
+    pub fn from_toml_str(s: &str) -> Result<MatchConfig, ConfigError> {
+        let cfg: MatchConfig = toml::from_str(s)?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    pub fn from_file(path: &Path) -> Result<MatchConfig, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        MatchConfig::from_toml_str(&text)
+    }
+
+    /// The configuration as TOML, in the layout `from_toml_str` reads.
+    pub fn to_toml_string(&self) -> String {
+        // Every field is a plain number, array or table, which TOML can always hold.
+        toml::to_string(self).expect("a MatchConfig is always representable in TOML")
+    }
+
+    /// Checks the ranges the referee relies on (the sim checks its own section
+    /// when a `Sim` is built).
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        fn positive(field: &'static str, v: f32) -> Result<(), ConfigError> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(ConfigError::Invalid {
+                    field,
+                    reason: format!("must be a positive number, got {v}"),
+                })
+            }
+        }
+        fn non_negative(field: &'static str, v: f32) -> Result<(), ConfigError> {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(ConfigError::Invalid {
+                    field,
+                    reason: format!("must be zero or more, got {v}"),
+                })
+            }
+        }
+        positive("match.minutes", self.minutes)?;
+        positive("match.control_hz", self.control_hz)?;
+        let steps = crate::sim_glue::steps_per_tick(&self.sim, self.control_hz);
+        let tick = 1.0 / f64::from(self.control_hz);
+        let stepped = f64::from(steps) * f64::from(self.sim.dt);
+        // A bad dt is the sim's to report, when the match builds its Sim.
+        let dt_ok = self.sim.dt.is_finite() && self.sim.dt > 0.0;
+        if dt_ok && (stepped - tick).abs() > 0.01 * tick {
+            return Err(ConfigError::Invalid {
+                field: "match.control_hz",
+                reason: format!(
+                    "must make a control tick a whole number of physics steps (sim.dt = {} s), got {} Hz",
+                    self.sim.dt, self.control_hz
+                ),
+            });
+        }
+        let r = &self.rules;
+        positive("rules.b_d", r.b_d)?;
+        positive("rules.b_rad", r.b_rad)?;
+        if r.b_rad > std::f32::consts::PI {
+            return Err(ConfigError::Invalid {
+                field: "rules.b_rad",
+                reason: format!("must be at most pi, got {}", r.b_rad),
+            });
+        }
+        non_negative("rules.standup_seconds", r.standup_seconds)?;
+        positive("rules.fall_height", r.fall_height)?;
+        positive("rules.fall_tilt", r.fall_tilt)?;
+        non_negative("rules.ball_inset", r.ball_inset)?;
+        non_negative("rules.robot_out_margin", r.robot_out_margin)?;
+        for (field, places) in [
+            ("rules.kickoff_attack", &r.kickoff_attack),
+            ("rules.kickoff_defend", &r.kickoff_defend),
+        ] {
+            if places.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(ConfigError::Invalid {
+                    field,
+                    reason: "must hold finite numbers".into(),
+                });
+            }
+        }
+        let w = &self.reward;
+        for (field, v) in [
+            ("reward.goal", w.goal),
+            ("reward.close", w.close),
+            ("reward.control", w.control),
+            ("reward.opponent_control", w.opponent_control),
+        ] {
+            non_negative(field, v)?;
+        }
+        positive("reward.close_scale", w.close_scale)?;
+        Ok(())
+    }
+}
+
+/// The file's layout: `minutes` and `control_hz` live in a `[match]` section.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct MatchConfigFile {
+    #[serde(rename = "match")]
+    game: MatchSection,
+    rules: RulesConfig,
+    reward: RewardConfig,
+    sim: SimConfig,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct MatchSection {
+    minutes: f32,
+    control_hz: f32,
+}
+
+impl Default for MatchSection {
+    fn default() -> Self {
+        MatchSection {
+            minutes: 10.0,
+            control_hz: 10.0,
+        }
+    }
+}
+
+impl From<MatchConfigFile> for MatchConfig {
+    fn from(f: MatchConfigFile) -> Self {
+        MatchConfig {
+            sim: f.sim,
+            rules: f.rules,
+            reward: f.reward,
+            minutes: f.game.minutes,
+            control_hz: f.game.control_hz,
+        }
+    }
+}
+
+impl From<MatchConfig> for MatchConfigFile {
+    fn from(c: MatchConfig) -> Self {
+        MatchConfigFile {
+            game: MatchSection {
+                minutes: c.minutes,
+                control_hz: c.control_hz,
+            },
+            rules: c.rules,
+            reward: c.reward,
+            sim: c.sim,
+        }
+    }
+}

@@ -1,0 +1,419 @@
+//! `Match`, the one driver: apply actions, step the sim for one control tick,
+//! run the rules, apply their commands, keep score and statistics.
+
+use naosoccer_proto::{
+    Action, Event, MatchStats, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS,
+};
+use naosoccer_sim::{Command as SimCommand, RobotModel, Sim, SimError};
+
+use crate::config::{ConfigError, MatchConfig};
+use crate::observe::{self, ObsContext};
+use crate::rules::{
+    Clock, Command, FallRule, Field, GoalRule, KickOff, OutOfBoundsRule, Outcome, PassRule,
+    PossessionRule,
+};
+
+/// Why a match could not be set up.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MatchError {
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    #[error("cannot build the simulation: {0}")]
+    Sim(#[from] SimError),
+}
+
+/// One match: the sim, the rules and everything they remember.
+pub struct Match {
+    cfg: MatchConfig,
+    seed: u64,
+    sim: Sim,
+    field: Field,
+    steps_per_tick: u32,
+    clock: Clock,
+    kickoff: KickOff,
+    goal: GoalRule,
+    out_of_bounds: OutOfBoundsRule,
+    fall: FallRule,
+    possession: PossessionRule,
+    pass: PassRule,
+    /// Control ticks played.
+    tick: u64,
+    finished: bool,
+    /// The start's kick-off, announced with the first tick's events.
+    announce_start: bool,
+    controller: Option<RobotId>,
+    /// Goals, indexed by `Team::index`.
+    score: [u32; 2],
+    stats: MatchStats,
+    /// The team that scored during the last tick (for the reward).
+    last_goal: Option<Team>,
+    outcome: Outcome,
+}
+
+impl Match {
+    /// A match at its kick-off: every robot in its place, the ball on the centre spot.
+    pub fn new(cfg: &MatchConfig, seed: u64) -> Result<Match, MatchError> {
+        cfg.validate()?;
+        let model = RobotModel::builtin()?;
+        let sim = Sim::new(&cfg.sim, &model, seed)?;
+        let field = Field::from_sim(&cfg.sim);
+        let r = &cfg.rules;
+        let steps_per_tick = crate::sim_glue::steps_per_tick(&cfg.sim, cfg.control_hz);
+        let standup_ticks =
+            (f64::from(r.standup_seconds) * f64::from(cfg.control_hz)).round() as u64;
+        let mut m = Match {
+            seed,
+            sim,
+            field,
+            steps_per_tick,
+            clock: Clock::new(cfg.minutes, cfg.control_hz),
+            kickoff: KickOff::new(r),
+            goal: GoalRule::new(field),
+            out_of_bounds: OutOfBoundsRule::new(field, r.ball_inset, r.robot_out_margin),
+            fall: FallRule::new(r.fall_height, r.fall_tilt, standup_ticks),
+            possession: PossessionRule::new(r.b_d, r.b_rad),
+            pass: PassRule::new(),
+            tick: 0,
+            finished: false,
+            announce_start: true,
+            controller: None,
+            score: [0; 2],
+            stats: MatchStats::default(),
+            last_goal: None,
+            outcome: Outcome::default(),
+            cfg: cfg.clone(),
+        };
+        m.place_for_kickoff(KickOff::FIRST);
+        Ok(m)
+    }
+
+    /// Plays one control tick with these actions (robot index order: blue
+    /// players 0..=3, then red 0..=3) and returns the tick's events. A robot
+    /// lying on the pitch ignores its action. After the end, does nothing.
+    pub fn step(&mut self, actions: &[Action; ROBOTS]) -> &[Event] {
+        self.outcome.clear();
+        self.last_goal = None;
+        if self.finished {
+            return &self.outcome.events;
+        }
+        let tick = self.tick;
+        if std::mem::take(&mut self.announce_start) {
+            self.outcome.events.push(Event::KickOff {
+                tick,
+                team: KickOff::FIRST,
+            });
+        }
+        for (i, &a) in actions.iter().enumerate() {
+            let cmd = if self.fall.is_down(i) {
+                SimCommand::Stay
+            } else {
+                sim_command(a)
+            };
+            self.sim.set_command(i, cmd);
+        }
+        for _ in 0..self.steps_per_tick {
+            self.sim.step();
+            // Kicks are reported per physics step; gather the tick's.
+            for k in &self.sim.snapshot().kicks {
+                if let Some(robot) = RobotId::from_index(k.robot) {
+                    self.outcome.events.push(Event::Kick {
+                        tick,
+                        robot,
+                        speed: k.speed,
+                    });
+                    self.pass.kick(robot);
+                }
+            }
+        }
+        self.run_rules(tick);
+        for e in &self.outcome.events {
+            apply_stats(&mut self.stats, e);
+        }
+        self.apply_commands(tick);
+        self.tick += 1;
+        &self.outcome.events
+    }
+
+    fn run_rules(&mut self, tick: u64) {
+        let snap = self.sim.snapshot();
+        let out = &mut self.outcome;
+        let scored = self.goal.check(snap, tick, out);
+        if let Some(team) = scored {
+            self.score[team.index()] += 1;
+            self.last_goal = Some(team);
+        }
+        let ball_replaced = scored.is_some() || self.out_of_bounds.check_ball(snap, tick, out);
+        if scored.is_none() {
+            // After a goal every robot goes to its kick-off place anyway.
+            let down = self.fall.down();
+            self.out_of_bounds
+                .check_robots(snap, &down, &self.kickoff, tick, out);
+        }
+        self.fall.check(snap, tick, out);
+        if ball_replaced {
+            // The ball is taken out of play: nobody controls it and no pass spans the restart.
+            self.controller = None;
+            self.pass.reset();
+        } else {
+            self.controller = self.possession.controller(snap, &self.fall.down());
+            self.pass.control(self.controller, tick, out);
+        }
+        if let Some(c) = self.controller {
+            self.stats.team_mut(c.team()).control_ticks += 1;
+        }
+        self.finished = self.clock.check(tick, out);
+    }
+
+    fn apply_commands(&mut self, tick: u64) {
+        for i in 0..self.outcome.commands.len() {
+            match self.outcome.commands[i] {
+                Command::PlaceBall { x, y } => self.sim.place_ball(x, y),
+                Command::ResetRobot {
+                    robot,
+                    x,
+                    y,
+                    heading,
+                } => {
+                    self.sim.place_robot(robot.index(), x, y, heading);
+                    // It fell on its way out this very tick: reset means upright.
+                    if self.fall.is_down(robot.index()) {
+                        self.fall.clear_robot(robot.index());
+                        self.outcome.events.push(Event::GetUp { tick, robot });
+                    }
+                }
+                Command::StandUp { robot } => self.sim.stand_up(robot.index()),
+                Command::KickOff { team } => {
+                    // Robots lying at a kick-off are stood up in their places.
+                    for robot in RobotId::all() {
+                        if self.fall.is_down(robot.index()) {
+                            self.outcome.events.push(Event::GetUp { tick, robot });
+                        }
+                    }
+                    self.place_for_kickoff(team);
+                    self.outcome.events.push(Event::KickOff { tick, team });
+                }
+            }
+        }
+    }
+
+    fn place_for_kickoff(&mut self, team: Team) {
+        self.sim.place_ball(0.0, 0.0);
+        for robot in RobotId::all() {
+            let [x, y, h] = self.kickoff.place(robot, team);
+            self.sim.place_robot(robot.index(), x, y, h);
+        }
+        self.fall.clear();
+        self.pass.reset();
+        self.controller = None;
+    }
+
+    /// What `player` of `team` sees now, in its team's frame (attacking +x).
+    pub fn observe(&self, team: Team, player: usize) -> Observation {
+        let mut o = observe::blank_observation();
+        self.observe_into(team, player, &mut o);
+        o
+    }
+
+    /// `observe` into a reused observation (no allocation).
+    pub fn observe_into(&self, team: Team, player: usize, out: &mut Observation) {
+        let down = self.fall.down();
+        let ctx = ObsContext {
+            tick: self.tick,
+            time_left: self.clock.time_left(self.tick),
+            score: self.score,
+            down: &down,
+            controller: self.controller,
+        };
+        observe::fill(self.sim.snapshot(), &ctx, team, player, out);
+    }
+
+    /// Control ticks played so far.
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+
+    pub fn total_ticks(&self) -> u64 {
+        self.clock.total_ticks()
+    }
+
+    pub fn is_finished(&self) -> bool {
+        self.finished
+    }
+
+    /// Game time played, seconds: ticks over the control rate (the config
+    /// check keeps the physics steps of a tick within 1% of a tick).
+    pub fn sim_seconds(&self) -> f64 {
+        self.tick as f64 / f64::from(self.cfg.control_hz)
+    }
+
+    /// Physics steps per control tick.
+    pub fn steps_per_tick(&self) -> u32 {
+        self.steps_per_tick
+    }
+
+    /// (blue, red) goals.
+    pub fn score(&self) -> (u32, u32) {
+        (self.score[0], self.score[1])
+    }
+
+    /// Statistics so far; control rates are shares of the ticks in which any
+    /// team controlled the ball (both 0 while nobody has).
+    pub fn stats(&self) -> MatchStats {
+        let mut s = self.stats;
+        let total = s.blue.control_ticks + s.red.control_ticks;
+        if total > 0 {
+            s.blue.control_rate = s.blue.control_ticks as f64 / total as f64;
+            s.red.control_rate = s.red.control_ticks as f64 / total as f64;
+        }
+        s
+    }
+
+    /// The sim's state hash mixed with the referee's state (clock, score,
+    /// possession, falls, pass chain): equal hashes mean equal matches.
+    pub fn state_hash(&self) -> u64 {
+        let mut h = Fnv::new();
+        h.write(self.sim.state_hash());
+        h.write(self.tick);
+        h.write(u64::from(self.finished));
+        h.write(u64::from(self.score[0]));
+        h.write(u64::from(self.score[1]));
+        h.write(self.controller.map_or(u64::MAX, |c| c.index() as u64));
+        for i in 0..ROBOTS {
+            h.write(self.fall.up_at(i).unwrap_or(u64::MAX));
+        }
+        h.write(self.pass.fingerprint());
+        h.finish()
+    }
+
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    pub fn config(&self) -> &MatchConfig {
+        &self.cfg
+    }
+
+    /// The pitch as the rules see it.
+    pub fn field(&self) -> &Field {
+        &self.field
+    }
+
+    pub fn sim(&self) -> &Sim {
+        &self.sim
+    }
+
+    /// For tests that stage situations. Changes made here are seen by the
+    /// rules at the end of the next tick.
+    pub fn sim_mut(&mut self) -> &mut Sim {
+        &mut self.sim
+    }
+
+    /// Who controls the ball (the paper's `if_c`), as of the last tick.
+    pub fn controller(&self) -> Option<RobotId> {
+        self.controller
+    }
+
+    /// Whether the referee counts this robot as lying on the pitch.
+    pub fn is_down(&self, robot: RobotId) -> bool {
+        self.fall.is_down(robot.index())
+    }
+
+    /// The tick at which a lying robot will be stood up.
+    pub fn up_at(&self, robot: RobotId) -> Option<u64> {
+        self.fall.up_at(robot.index())
+    }
+
+    /// Per-robot reward of the last tick for `team` (learn's MDP):
+    /// `s = r_goal + r_close + r_control`, returned as `sign(s) * ln(1 + |s|)`
+    /// (DESIGN.md explains why not the paper's `-log(s)`).
+    pub fn rewards(&self, team: Team) -> [f32; PLAYERS_PER_TEAM] {
+        let w = &self.cfg.reward;
+        let goal = match self.last_goal {
+            Some(t) if t == team => w.goal,
+            Some(_) => -w.goal,
+            None => 0.0,
+        };
+        let opponent = match self.controller {
+            Some(c) if c.team() != team => -w.opponent_control,
+            _ => 0.0,
+        };
+        let snap = self.sim.snapshot();
+        std::array::from_fn(|p| {
+            let Some(robot) = RobotId::new(team, p) else {
+                return 0.0;
+            };
+            let r = &snap.robots[robot.index()];
+            let d = (snap.ball.pos[0] - r.pos[0]).hypot(snap.ball.pos[1] - r.pos[1]);
+            let close = w.close * (-d / w.close_scale).exp();
+            let control = if self.controller == Some(robot) {
+                w.control
+            } else {
+                0.0
+            };
+            log_compress(goal + close + control + opponent)
+        })
+    }
+}
+
+/// `sign(s) * ln(1 + |s|)`: keeps the sign, compresses the size.
+pub fn log_compress(s: f32) -> f32 {
+    s.signum() * s.abs().ln_1p()
+}
+
+fn sim_command(a: Action) -> SimCommand {
+    match a {
+        Action::Forward => SimCommand::Forward,
+        Action::TurnLeft => SimCommand::TurnLeft,
+        Action::TurnRight => SimCommand::TurnRight,
+        Action::Shoot => SimCommand::Shoot,
+        Action::Stay => SimCommand::Stay,
+    }
+}
+
+/// Statistics follow from the event stream alone.
+fn apply_stats(stats: &mut MatchStats, e: &Event) {
+    match *e {
+        Event::Goal { team, .. } => stats.team_mut(team).goals += 1,
+        Event::Kick { robot, .. } => stats.team_mut(robot.team()).shots += 1,
+        Event::Pass { from, .. } => stats.team_mut(from.team()).passes += 1,
+        Event::Fall { robot, .. } => stats.team_mut(robot.team()).falls += 1,
+        // A ball out counts against the team that touched it last.
+        Event::BallOut {
+            last_touch: Some(team),
+            ..
+        } => stats.team_mut(team).out_of_bounds += 1,
+        Event::RobotOut { robot, .. } => stats.team_mut(robot.team()).out_of_bounds += 1,
+        _ => {}
+    }
+}
+
+/// FNV-1a over 64-bit words: a fixed, platform-independent mix.
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Fnv {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn write(&mut self, v: u64) {
+        for b in v.to_le_bytes() {
+            self.0 ^= u64::from(b);
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_compress_keeps_sign_and_zero() {
+        assert_eq!(log_compress(0.0), 0.0);
+        assert!((log_compress(1.0) - 2f32.ln()).abs() < 1e-6);
+        assert!((log_compress(-1.0) + 2f32.ln()).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,83 @@
+//! Observations in the player's team frame: every team attacks +x. Red sees
+//! the world turned half round: x -> -x, y -> -y, heading + pi.
+
+use std::f32::consts::PI;
+
+use naosoccer_proto::{
+    BallObs, Observation, RobotId, RobotObs, ScoreObs, Team, PLAYERS_PER_TEAM, ROBOTS,
+};
+use naosoccer_sim::Snapshot;
+
+use crate::rules::wrap_angle;
+
+/// What the referee knows beyond the snapshot.
+pub(crate) struct ObsContext<'a> {
+    pub tick: u64,
+    pub time_left: f32,
+    /// Goals, indexed by `Team::index`.
+    pub score: [u32; 2],
+    pub down: &'a [bool; ROBOTS],
+    pub controller: Option<RobotId>,
+}
+
+/// Fills `out` for `player` of `team`. Writes every field, so a reused
+/// observation carries nothing over from its last use.
+pub(crate) fn fill(
+    snap: &Snapshot,
+    ctx: &ObsContext<'_>,
+    team: Team,
+    player: usize,
+    out: &mut Observation,
+) {
+    let (sx, rot) = match team {
+        Team::Blue => (1.0, 0.0),
+        Team::Red => (-1.0, PI),
+    };
+    let robot_obs = |i: usize| {
+        let r = &snap.robots[i];
+        RobotObs {
+            x: sx * r.pos[0],
+            y: sx * r.pos[1],
+            heading: wrap_angle(r.heading + rot),
+            fallen: ctx.down[i],
+        }
+    };
+    let own_base = team.index() * PLAYERS_PER_TEAM;
+    let opp_base = team.other().index() * PLAYERS_PER_TEAM;
+    out.tick = ctx.tick;
+    out.team = team;
+    out.player = (player % PLAYERS_PER_TEAM) as u8;
+    out.time_left = ctx.time_left;
+    out.score = ScoreObs {
+        own: ctx.score[team.index()],
+        opponent: ctx.score[team.other().index()],
+    };
+    for p in 0..PLAYERS_PER_TEAM {
+        out.own[p] = robot_obs(own_base + p);
+        out.opponents[p] = robot_obs(opp_base + p);
+        out.control[p] = ctx.controller == RobotId::new(team, p);
+    }
+    out.ball = BallObs {
+        x: sx * snap.ball.pos[0],
+        y: sx * snap.ball.pos[1],
+        vx: sx * snap.ball.vel[0],
+        vy: sx * snap.ball.vel[1],
+    };
+    out.opponent_control = ctx.controller.is_some_and(|c| c.team() != team);
+}
+
+/// An observation with every field zero, to be filled by `observe_into`.
+pub fn blank_observation() -> Observation {
+    Observation {
+        tick: 0,
+        team: Team::Blue,
+        player: 0,
+        time_left: 0.0,
+        score: ScoreObs::default(),
+        own: [RobotObs::default(); PLAYERS_PER_TEAM],
+        opponents: [RobotObs::default(); PLAYERS_PER_TEAM],
+        ball: BallObs::default(),
+        control: [false; PLAYERS_PER_TEAM],
+        opponent_control: false,
+    }
+}

@@ -1,0 +1,128 @@
+//! Falls (the paper's fall detection and `getup`): a robot whose torso drops
+//! under the height threshold or tilts past the tilt threshold has fallen. It
+//! lies, as an obstacle and without acting, for the stand-up cost, then is
+//! stood up where it lies.
+
+use naosoccer_proto::{Event, RobotId, ROBOTS};
+use naosoccer_sim::Snapshot;
+
+use super::{Command, Outcome};
+
+#[derive(Debug, Clone)]
+pub struct FallRule {
+    height: f32,
+    tilt: f32,
+    standup_ticks: u64,
+    /// For each lying robot, the tick at which it gets up.
+    up_at: [Option<u64>; ROBOTS],
+}
+
+impl FallRule {
+    pub fn new(height: f32, tilt: f32, standup_ticks: u64) -> FallRule {
+        FallRule {
+            height,
+            tilt,
+            standup_ticks,
+            up_at: [None; ROBOTS],
+        }
+    }
+
+    /// Whether a robot is lying on the pitch, as the referee counts it.
+    pub fn is_down(&self, robot: usize) -> bool {
+        self.up_at.get(robot).is_some_and(Option::is_some)
+    }
+
+    /// `is_down` for every robot.
+    pub fn down(&self) -> [bool; ROBOTS] {
+        self.up_at.map(|u| u.is_some())
+    }
+
+    /// The tick at which a lying robot will be stood up.
+    pub fn up_at(&self, robot: usize) -> Option<u64> {
+        self.up_at.get(robot).copied().flatten()
+    }
+
+    /// Forgets every fall: after a kick-off everybody stands in place.
+    pub fn clear(&mut self) {
+        self.up_at = [None; ROBOTS];
+    }
+
+    /// Forgets one robot's fall (it was reset upright).
+    pub fn clear_robot(&mut self, robot: usize) {
+        if let Some(u) = self.up_at.get_mut(robot) {
+            *u = None;
+        }
+    }
+
+    /// Whether the snapshot shows robot `i` fallen.
+    pub fn has_fallen(&self, snap: &Snapshot, i: usize) -> bool {
+        let r = &snap.robots[i];
+        r.fallen || r.pos[2] < self.height || r.tilt > self.tilt
+    }
+
+    pub fn check(&mut self, snap: &Snapshot, tick: u64, out: &mut Outcome) {
+        for i in 0..ROBOTS {
+            let Some(robot) = RobotId::from_index(i) else {
+                continue;
+            };
+            match self.up_at[i] {
+                Some(up) if tick >= up => {
+                    self.up_at[i] = None;
+                    out.events.push(Event::GetUp { tick, robot });
+                    out.commands.push(Command::StandUp { robot });
+                }
+                Some(_) => {}
+                None if self.has_fallen(snap, i) => {
+                    self.up_at[i] = Some(tick + self.standup_ticks);
+                    out.events.push(Event::Fall { tick, robot });
+                }
+                None => {}
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rules::testing::snapshot;
+
+    #[test]
+    fn low_torso_falls_and_gets_up_after_the_cost() {
+        let mut rule = FallRule::new(0.2, 1.0, 30);
+        let mut s = snapshot();
+        let mut out = Outcome::default();
+        rule.check(&s, 10, &mut out);
+        assert!(out.events.is_empty());
+        s.robots[2].pos[2] = 0.1;
+        rule.check(&s, 11, &mut out);
+        let robot = RobotId::from_index(2).unwrap();
+        assert_eq!(out.events, vec![Event::Fall { tick: 11, robot }]);
+        assert!(rule.is_down(2));
+        out.clear();
+        for t in 12..41 {
+            rule.check(&s, t, &mut out);
+        }
+        assert!(out.events.is_empty(), "{:?}", out.events);
+        rule.check(&s, 41, &mut out);
+        assert_eq!(out.events, vec![Event::GetUp { tick: 41, robot }]);
+        assert_eq!(out.commands, vec![Command::StandUp { robot }]);
+        assert!(!rule.is_down(2));
+    }
+
+    #[test]
+    fn tilt_alone_is_a_fall() {
+        let mut rule = FallRule::new(0.2, 1.0, 30);
+        let mut s = snapshot();
+        s.robots[6].tilt = 1.2;
+        let mut out = Outcome::default();
+        rule.check(&s, 3, &mut out);
+        assert_eq!(
+            out.events,
+            vec![Event::Fall {
+                tick: 3,
+                robot: RobotId::from_index(6).unwrap()
+            }]
+        );
+    }
+}

@@ -1,0 +1,441 @@
+//! The referee on the real sim: staged situations, one rule at a time.
+
+use std::f32::consts::PI;
+
+use naosoccer_proto::{Action, Event, RobotId, Team, ROBOTS};
+use naosoccer_referee::{Match, MatchConfig};
+
+const STAY: [Action; ROBOTS] = [Action::Stay; ROBOTS];
+
+fn new_match(seed: u64) -> Match {
+    Match::new(&MatchConfig::default(), seed).expect("default config builds")
+}
+
+fn robot(team: Team, player: usize) -> RobotId {
+    RobotId::new(team, player).unwrap()
+}
+
+/// Moves every robot to the touch lines, out of the way of staged play.
+fn clear_the_pitch(m: &mut Match) {
+    for i in 0..ROBOTS {
+        let x = -2.4 + 0.6 * (i % 4) as f32 + if i < 4 { 0.0 } else { 0.3 };
+        let y = if i < 4 { 2.0 } else { -2.0 };
+        m.sim_mut().place_robot(i, x, y, 0.0);
+    }
+}
+
+/// Steps with `actions` until `stop` says so (or `limit` ticks); returns every event seen.
+fn run_until(
+    m: &mut Match,
+    actions: &[Action; ROBOTS],
+    limit: u64,
+    mut stop: impl FnMut(&Match, &[Event]) -> bool,
+) -> Vec<Event> {
+    let mut seen = Vec::new();
+    for _ in 0..limit {
+        let events = m.step(actions).to_vec();
+        seen.extend(events.iter().cloned());
+        if stop(m, &events) {
+            break;
+        }
+    }
+    seen
+}
+
+fn ball_xy(m: &Match) -> (f32, f32) {
+    let b = m.sim().snapshot().ball.pos;
+    (b[0], b[1])
+}
+
+#[test]
+fn ball_rolled_over_the_line_between_the_posts_scores_and_goes_back_to_the_centre() {
+    let mut m = new_match(1);
+    clear_the_pitch(&mut m);
+    m.sim_mut().place_ball(2.4, 0.3);
+    m.sim_mut().set_ball_velocity(2.5, 0.0);
+    let events = run_until(&mut m, &STAY, 40, |_, ev| {
+        ev.iter().any(|e| matches!(e, Event::Goal { .. }))
+    });
+    let goal = events.iter().find(|e| matches!(e, Event::Goal { .. }));
+    assert!(
+        matches!(
+            goal,
+            Some(Event::Goal {
+                team: Team::Blue,
+                ..
+            })
+        ),
+        "no blue goal in {events:?}"
+    );
+    assert_eq!(m.score(), (1, 0));
+    assert_eq!(m.stats().blue.goals, 1);
+    // Red conceded, so red kicks off; the ball is back on the centre spot.
+    assert!(events.iter().any(|e| matches!(
+        e,
+        Event::KickOff {
+            team: Team::Red,
+            ..
+        }
+    )));
+    let (x, y) = ball_xy(&m);
+    assert!(x.abs() < 1e-3 && y.abs() < 1e-3, "ball at {x}, {y}");
+    // And robots are back at their kick-off places: red's striker near the centre.
+    let striker = m.sim().snapshot().robots[robot(Team::Red, 1).index()].pos;
+    assert!(
+        striker[0] > 0.0 && striker[0] < 0.5,
+        "red striker at {striker:?}"
+    );
+}
+
+#[test]
+fn ball_rolled_wide_of_the_post_is_out_not_a_goal() {
+    let mut m = new_match(2);
+    clear_the_pitch(&mut m);
+    m.sim_mut().place_ball(2.4, -1.7);
+    m.sim_mut().set_ball_velocity(2.5, 0.0);
+    let events = run_until(&mut m, &STAY, 40, |_, ev| {
+        ev.iter().any(|e| matches!(e, Event::BallOut { .. }))
+    });
+    assert_eq!(m.score(), (0, 0), "{events:?}");
+    assert!(!events.iter().any(|e| matches!(e, Event::Goal { .. })));
+    let out = events.iter().find_map(|e| match e {
+        Event::BallOut { x, y, .. } => Some((*x, *y)),
+        _ => None,
+    });
+    let (x, y) = out.expect("ball out");
+    // Put back at the nearest point inside: just inside the goal line, same y.
+    assert!((x - 2.8).abs() < 1e-4, "x {x}");
+    assert!((y + 1.7).abs() < 0.1, "y {y}");
+    let (bx, by) = ball_xy(&m);
+    assert!((bx - x).abs() < 1e-3 && (by - y).abs() < 1e-3);
+}
+
+#[test]
+fn ball_over_the_touch_line_is_put_back_inside() {
+    let mut m = new_match(3);
+    clear_the_pitch(&mut m);
+    m.sim_mut().place_ball(0.5, 1.9);
+    m.sim_mut().set_ball_velocity(0.0, 2.0);
+    let events = run_until(&mut m, &STAY, 40, |_, ev| {
+        ev.iter().any(|e| matches!(e, Event::BallOut { .. }))
+    });
+    let (x, y) = events
+        .iter()
+        .find_map(|e| match e {
+            Event::BallOut { x, y, .. } => Some((*x, *y)),
+            _ => None,
+        })
+        .expect("ball out");
+    assert!(
+        (y - 2.05).abs() < 1e-4 && (x - 0.5).abs() < 0.05,
+        "{x}, {y}"
+    );
+}
+
+#[test]
+fn robot_off_the_field_is_reset_to_its_place() {
+    let mut m = new_match(4);
+    let r = robot(Team::Red, 2);
+    m.sim_mut().place_robot(r.index(), 0.5, 2.7, 0.0);
+    let events = m.step(&STAY).to_vec();
+    assert!(
+        events.contains(&Event::RobotOut { tick: 0, robot: r }),
+        "{events:?}"
+    );
+    assert_eq!(m.stats().red.out_of_bounds, 1);
+    let pos = m.sim().snapshot().robots[r.index()].pos;
+    let home = MatchConfig::default().rules.kickoff_defend[2];
+    // Red's places are blue's turned half round.
+    assert!(
+        (pos[0] + home[0]).abs() < 0.05 && (pos[1] + home[1]).abs() < 0.05,
+        "{pos:?}"
+    );
+    // A robot walking off is caught too.
+    let b = robot(Team::Blue, 3);
+    m.sim_mut().place_robot(b.index(), 1.0, -2.1, -PI / 2.0);
+    let mut actions = STAY;
+    actions[b.index()] = Action::Forward;
+    let events = run_until(&mut m, &actions, 100, |_, ev| {
+        ev.iter().any(|e| matches!(e, Event::RobotOut { .. }))
+    });
+    assert!(
+        events
+            .iter()
+            .any(|e| matches!(e, Event::RobotOut { robot, .. } if *robot == b)),
+        "{events:?}"
+    );
+}
+
+#[test]
+fn pushed_robot_falls_and_gets_up_after_the_stand_up_cost() {
+    let mut m = new_match(5);
+    let r = robot(Team::Blue, 2);
+    m.step(&STAY);
+    m.sim_mut().push_robot(r.index(), [25.0, 0.0, 0.0]);
+    let events = run_until(&mut m, &STAY, 30, |_, ev| {
+        ev.iter().any(|e| matches!(e, Event::Fall { .. }))
+    });
+    let fall_tick = events
+        .iter()
+        .find_map(|e| match e {
+            Event::Fall { tick, robot } if *robot == r => Some(*tick),
+            _ => None,
+        })
+        .expect("the push made it fall");
+    assert!(m.is_down(r));
+    assert_eq!(m.stats().blue.falls, 1);
+    // While down it ignores its actions and is observed as fallen.
+    assert!(m.observe(Team::Blue, 2).me().fallen);
+    let cost = (MatchConfig::default().rules.standup_seconds * MatchConfig::default().control_hz)
+        .round() as u64;
+    let events = run_until(&mut m, &STAY, cost + 5, |_, ev| {
+        ev.iter().any(|e| matches!(e, Event::GetUp { .. }))
+    });
+    let up_tick = events
+        .iter()
+        .find_map(|e| match e {
+            Event::GetUp { tick, robot } if *robot == r => Some(*tick),
+            _ => None,
+        })
+        .expect("got up");
+    assert_eq!(up_tick, fall_tick + cost);
+    assert!(!m.is_down(r));
+    let s = m.sim().snapshot().robots[r.index()];
+    assert!(!s.fallen && s.tilt < 0.1, "{s:?}");
+    // It stays up.
+    run_until(&mut m, &STAY, 10, |_, _| false);
+    assert!(!m.is_down(r));
+    assert_eq!(m.stats().blue.falls, 1);
+}
+
+#[test]
+fn closest_robot_wins_a_contested_ball() {
+    let mut m = new_match(6);
+    clear_the_pitch(&mut m);
+    let (b, r) = (robot(Team::Blue, 1), robot(Team::Red, 1));
+    m.sim_mut().place_ball(0.0, 0.0);
+    m.sim_mut().place_robot(b.index(), -0.27, 0.0, 0.0);
+    m.sim_mut().place_robot(r.index(), 0.22, 0.0, PI);
+    m.step(&STAY);
+    assert_eq!(m.controller(), Some(r));
+    let blue = m.observe(Team::Blue, 1);
+    let red = m.observe(Team::Red, 1);
+    assert_eq!(blue.control, [false; 4]);
+    assert!(blue.opponent_control);
+    assert_eq!(red.control, [false, true, false, false]);
+    assert!(!red.opponent_control);
+    // Swap distances: blue is now the closer one.
+    m.sim_mut().place_robot(b.index(), -0.21, 0.0, 0.0);
+    m.sim_mut().place_robot(r.index(), 0.28, 0.0, PI);
+    m.sim_mut().place_ball(0.0, 0.0);
+    m.step(&STAY);
+    assert_eq!(m.controller(), Some(b));
+}
+
+#[test]
+fn possession_is_exclusive_through_a_busy_match() {
+    let mut m = new_match(7);
+    let mut obs = naosoccer_referee::blank_observation();
+    let mut controlled = 0;
+    // Everybody runs at the ball: lots of contests.
+    for t in 0..600u64 {
+        let mut actions = [Action::Stay; ROBOTS];
+        for (i, a) in actions.iter_mut().enumerate() {
+            let team = RobotId::from_index(i).unwrap().team();
+            m.observe_into(team, i % 4, &mut obs);
+            let me = obs.me();
+            let d = (obs.ball.y - me.y).atan2(obs.ball.x - me.x) - me.heading;
+            let d = d.sin().atan2(d.cos());
+            *a = if d > 0.3 {
+                Action::TurnLeft
+            } else if d < -0.3 {
+                Action::TurnRight
+            } else if (t + i as u64) % 13 == 5 {
+                Action::Shoot
+            } else {
+                Action::Forward
+            };
+        }
+        m.step(&actions);
+        let mut flags = 0;
+        for team in Team::BOTH {
+            m.observe_into(team, 0, &mut obs);
+            flags += obs.control.iter().filter(|c| **c).count();
+            assert_eq!(
+                obs.opponent_control,
+                m.controller().is_some_and(|c| c.team() != team)
+            );
+        }
+        assert!(flags <= 1);
+        assert_eq!(flags == 1, m.controller().is_some());
+        controlled += flags;
+    }
+    assert!(controlled > 0, "nobody ever controlled the ball");
+    let s = m.stats();
+    assert!((s.blue.control_rate + s.red.control_rate - 1.0).abs() < 1e-9);
+}
+
+#[test]
+fn staged_pass_counts_exactly_once() {
+    let mut m = new_match(8);
+    clear_the_pitch(&mut m);
+    let (a, b) = (robot(Team::Blue, 1), robot(Team::Blue, 2));
+    m.sim_mut().place_robot(a.index(), -1.0, 0.0, 0.0);
+    m.sim_mut().place_robot(b.index(), 0.3, 0.0, PI);
+    m.sim_mut().place_ball(-0.82, 0.0);
+    m.step(&STAY);
+    assert_eq!(m.controller(), Some(a));
+    let mut kick = STAY;
+    kick[a.index()] = Action::Shoot;
+    let mut events = run_until(&mut m, &kick, 10, |_, ev| {
+        ev.iter().any(|e| matches!(e, Event::Kick { .. }))
+    });
+    events.extend(run_until(&mut m, &STAY, 60, |_, _| false));
+    let passes: Vec<_> = events
+        .iter()
+        .filter(|e| matches!(e, Event::Pass { .. }))
+        .collect();
+    assert_eq!(passes.len(), 1, "{events:?}");
+    assert!(matches!(passes[0], Event::Pass { from, to, .. } if *from == a && *to == b));
+    assert_eq!(m.stats().blue.passes, 1);
+    assert_eq!(m.stats().blue.shots, 1);
+}
+
+#[test]
+fn same_seed_same_state_hash_different_seed_different() {
+    let play = |seed: u64| {
+        let mut m = new_match(seed);
+        let actions = [
+            Action::Forward,
+            Action::TurnLeft,
+            Action::Forward,
+            Action::Forward,
+            Action::Forward,
+            Action::TurnRight,
+            Action::Forward,
+            Action::Shoot,
+        ];
+        for _ in 0..150 {
+            m.step(&actions);
+        }
+        m.state_hash()
+    };
+    assert_eq!(play(11), play(11));
+    assert_ne!(play(11), play(12));
+}
+
+#[test]
+fn red_sees_the_world_turned_half_round() {
+    let mut m = new_match(9);
+    m.sim_mut().place_ball(1.0, 0.5);
+    let blue = m.observe(Team::Blue, 0);
+    let red = m.observe(Team::Red, 0);
+    assert_eq!((blue.ball.x, blue.ball.y), (1.0, 0.5));
+    assert_eq!((red.ball.x, red.ball.y), (-1.0, -0.5));
+    // Both keepers stand in front of their own goal, at -x in their own frame,
+    // facing +x.
+    for o in [&blue, &red] {
+        assert!(o.me().x < -2.0, "{:?}", o.me());
+        assert!(o.me().heading.abs() < 0.05, "{:?}", o.me());
+        assert!(o.opponents[0].x > 2.0);
+    }
+    assert_eq!(red.team, Team::Red);
+    assert!(red.time_left > 599.0);
+}
+
+#[test]
+fn the_match_ends_on_time() {
+    let cfg = MatchConfig {
+        minutes: 0.5,
+        ..MatchConfig::default()
+    };
+    let mut m = Match::new(&cfg, 10).unwrap();
+    assert_eq!(m.total_ticks(), 300);
+    let events = run_until(&mut m, &STAY, 1000, |m, _| m.is_finished());
+    assert_eq!(m.tick(), 300);
+    assert_eq!(events.last(), Some(&Event::End { tick: 299 }));
+    assert!(matches!(
+        events.first(),
+        Some(Event::KickOff {
+            tick: 0,
+            team: Team::Blue
+        })
+    ));
+    assert!(m.step(&STAY).is_empty());
+    assert_eq!(m.tick(), 300);
+    assert!((m.sim_seconds() - 30.0).abs() < 1e-6);
+}
+
+#[test]
+fn default_config_is_the_shipped_file() {
+    let from_file = MatchConfig::from_toml_str(naosoccer_referee::DEFAULT_CONFIG_TOML).unwrap();
+    if MatchConfig::default() != from_file {
+        // Name the fields that differ rather than dump two long structs.
+        let table = |c: &MatchConfig| c.to_toml_string().parse::<toml::Table>().unwrap();
+        let (code, file) = (table(&MatchConfig::default()), table(&from_file));
+        let mut diffs = Vec::new();
+        for (section, v) in &code {
+            let other = file.get(section).and_then(|s| s.as_table());
+            for (key, value) in v.as_table().into_iter().flatten() {
+                let in_file = other.and_then(|t| t.get(key));
+                if in_file != Some(value) {
+                    diffs.push(format!(
+                        "[{section}] {key}: default {value}, file {in_file:?}"
+                    ));
+                }
+            }
+        }
+        panic!(
+            "assets/match.toml differs from MatchConfig::default():\n{}",
+            diffs.join("\n")
+        );
+    }
+    // And what we write, we read back.
+    let again = MatchConfig::from_toml_str(&from_file.to_toml_string()).unwrap();
+    assert_eq!(again, from_file);
+}
+
+#[test]
+fn bad_config_errors_name_the_field() {
+    let err = MatchConfig::from_toml_str("[rules]\nb_d = -1.0\n")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("rules.b_d"), "{err}");
+    let err = MatchConfig::from_toml_str("[rules]\nbd = 0.3\n")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("bd"), "{err}");
+    let err = MatchConfig::from_toml_str("[match]\nminutes = \"ten\"\n")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("minutes"), "{err}");
+    let err =
+        MatchConfig::from_toml_str("[sim]\ndt = 0.0\n").map(|c| Match::new(&c, 1).map(|_| ()));
+    assert!(
+        matches!(&err, Ok(Err(e)) if e.to_string().contains("dt")),
+        "{:?}",
+        err.map(|r| r.map_err(|e| e.to_string()))
+    );
+    // A partial file keeps the other defaults.
+    let c = MatchConfig::from_toml_str("[match]\nminutes = 2.0\n").unwrap();
+    assert_eq!(c.minutes, 2.0);
+    assert_eq!(c.rules, MatchConfig::default().rules);
+}
+
+#[test]
+fn rewards_share_the_goal_and_favour_the_controller() {
+    let mut m = new_match(12);
+    clear_the_pitch(&mut m);
+    m.sim_mut().place_ball(2.4, 0.3);
+    m.sim_mut().set_ball_velocity(2.5, 0.0);
+    run_until(&mut m, &STAY, 40, |_, ev| {
+        ev.iter().any(|e| matches!(e, Event::Goal { .. }))
+    });
+    let blue = m.rewards(Team::Blue);
+    let red = m.rewards(Team::Red);
+    assert!(blue.iter().all(|r| *r > 2.0), "{blue:?}");
+    assert!(red.iter().all(|r| *r < -2.0), "{red:?}");
+    // The next tick without a goal: small rewards again.
+    m.step(&STAY);
+    assert!(m.rewards(Team::Blue).iter().all(|r| r.abs() < 1.0));
+}

@@ -1,0 +1,7 @@
+//! Library side of the `naosoccer` binary: code the CLI and the end-to-end
+//! tests share.
+//!
+//! - [`runner`]: plays a whole match in process (one `Match`, one built-in
+//!   policy instance per robot) and reports the outcome.
+
+pub mod runner;
