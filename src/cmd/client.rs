@@ -1,9 +1,84 @@
-//! `naosoccer client`.
+//! `naosoccer client`: one team's robot clients.
+use anyhow::Context;
 use clap::Args;
+use naosoccer_client::robot::{run_team, TeamRun};
+use naosoccer_client::PolicyKind;
+use naosoccer_proto::msg::{MatchId, Player};
+use naosoccer_proto::Team;
 
 #[derive(Args, Debug)]
-pub struct ClientArgs {}
+#[command(after_help = "\
+By default every player is its own robot connection (like real robots); \
+--team-connection runs them all over one team connection instead (the paper's \
+central scheduling). Without --match the clients join the oldest unfinished \
+match whose slots are free. When the match ends the team's statistics are \
+printed and the command exits 0.")]
+pub struct ClientArgs {
+    /// Server address.
+    #[arg(long, value_name = "HOST:PORT", default_value = "127.0.0.1:7878")]
+    pub server: String,
+    #[arg(long, value_name = "blue|red")]
+    pub team: Team,
+    /// The team's token (printed by the server at start).
+    #[arg(long, value_name = "TOKEN")]
+    pub token: String,
+    /// Match id to join.
+    #[arg(long = "match", value_name = "ID")]
+    pub match_id: Option<u64>,
+    /// Players to run, comma-separated, 0..=3 (0 keeps goal).
+    #[arg(long, value_delimiter = ',', default_value = "0,1,2,3")]
+    pub players: Vec<u8>,
+    /// Built-in policy.
+    #[arg(long, value_name = "scripted|random|idle", default_value = "scripted")]
+    pub policy: PolicyKind,
+    /// One connection for all players instead of one per player.
+    #[arg(long)]
+    pub team_connection: bool,
+}
 
-pub fn run(_args: ClientArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`client` is being built")
+pub fn run(args: ClientArgs) -> anyhow::Result<()> {
+    super::server::init_logging();
+    let players = args
+        .players
+        .iter()
+        .map(|&p| Player::try_from(p).map_err(anyhow::Error::msg))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let run = TeamRun {
+        server: args.server.clone(),
+        team: args.team,
+        token: args.token.clone(),
+        match_id: args.match_id.map(MatchId),
+        players,
+        policy: args.policy,
+        team_connection: args.team_connection,
+    };
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()?;
+    let results = rt
+        .block_on(run_team(&run))
+        .with_context(|| format!("playing on {}", args.server))?;
+    let end = &results.first().context("no connection finished")?.end;
+    let team = args.team;
+    let s = end.stats.team(team);
+    let misses: u64 = results
+        .iter()
+        .flat_map(|r| r.players.iter().map(|p| end.misses.get(team)[p.index()]))
+        .sum();
+    println!(
+        "match {} {:?} after {} ticks: blue {} - {} red",
+        end.match_id, end.reason, end.tick, end.score.blue, end.score.red
+    );
+    println!(
+        "{team}: goals {}, ball control {:.1}% ({} ticks), passes {}, shots {}, falls {}, out of bounds {}, missed ticks {}",
+        s.goals,
+        100.0 * s.control_rate,
+        s.control_ticks,
+        s.passes,
+        s.shots,
+        s.falls,
+        s.out_of_bounds,
+        misses
+    );
+    Ok(())
 }

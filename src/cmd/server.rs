@@ -1,9 +1,421 @@
-//! `naosoccer server`.
+//! `naosoccer server`: the match server, and `bench server`.
+use anyhow::Context;
 use clap::Args;
+use naosoccer_proto::msg::{Fill, Mode};
+use naosoccer_server::{Hooks, MatchObserver, ServerConfig, TickRecord};
+use std::path::PathBuf;
+use std::sync::Arc;
+use tokio::net::TcpListener;
 
 #[derive(Args, Debug)]
-pub struct ServerArgs {}
+#[command(after_help = "\
+The server listens on 127.0.0.1 (loopback only) unless --bind says otherwise. \
+At start it creates --matches matches (ids 1..N, seeds --seed, --seed+1, ...) and \
+prints the team and admin tokens (random unless set in the config file or here). \
+A match starts once --start-players robots have joined (8: every slot is a \
+client); slots nobody joined are played by --fill. Ctrl-C or SIGTERM stops \
+every match; clients get a final match_end. Protocol: docs/PROTOCOL.md.")]
+pub struct ServerArgs {
+    /// Server configuration TOML (every field optional; see docs/PROTOCOL.md).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Address to listen on [default: 127.0.0.1, loopback only].
+    #[arg(long, value_name = "ADDR")]
+    pub bind: Option<String>,
+    /// TCP port [default: 7878; 0 picks a free one].
+    #[arg(long)]
+    pub port: Option<u16>,
+    /// lockstep (a tick waits for every client, up to the deadline) or realtime (fixed rate).
+    #[arg(long, value_name = "lockstep|realtime")]
+    pub mode: Option<Mode>,
+    /// Matches created at start [default: 1].
+    #[arg(long)]
+    pub matches: Option<u32>,
+    /// Seed of match 1 (match i gets seed+i-1) [default: 1].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Match length in minutes, overriding the match configuration [default: 10].
+    #[arg(long)]
+    pub minutes: Option<f32>,
+    /// Match configuration TOML [default: the built-in assets/match.toml].
+    #[arg(long, value_name = "FILE")]
+    pub match_config: Option<PathBuf>,
+    /// Who plays slots no client joined.
+    #[arg(long, value_name = "scripted|idle")]
+    pub fill: Option<Fill>,
+    /// Robots that must join before a match starts, 0..=8 [default: 8].
+    #[arg(long)]
+    pub start_players: Option<u8>,
+    /// Lockstep deadline per tick in milliseconds [default: 1000].
+    #[arg(long)]
+    pub deadline_ms: Option<u64>,
+    /// Blue's team token [default: from --config, else random and printed].
+    #[arg(long, value_name = "TOKEN")]
+    pub blue_token: Option<String>,
+    /// Red's team token [default: from --config, else random and printed].
+    #[arg(long, value_name = "TOKEN")]
+    pub red_token: Option<String>,
+    /// The admin token (create_match) [default: from --config, else random and printed].
+    #[arg(long, value_name = "TOKEN")]
+    pub admin_token: Option<String>,
+    /// Exit once the matches created at start have all ended.
+    #[arg(long)]
+    pub exit_when_done: bool,
+    /// Record every match to this directory, one MCAP file per match
+    /// (docs/RECORDINGS.md) [default: from --config, else ./recordings].
+    #[arg(long, value_name = "DIR", conflicts_with = "no_record")]
+    pub record_dir: Option<PathBuf>,
+    /// Do not record matches.
+    #[arg(long)]
+    pub no_record: bool,
+}
 
-pub fn run(_args: ServerArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`server` is being built")
+fn config_from(args: &ServerArgs) -> anyhow::Result<ServerConfig> {
+    let mut cfg = match &args.config {
+        Some(path) => {
+            ServerConfig::from_file(path).with_context(|| format!("loading {}", path.display()))?
+        }
+        None => ServerConfig::default(),
+    };
+    macro_rules! set {
+        ($($field:ident),*) => { $( if let Some(v) = &args.$field { cfg.$field = v.clone(); } )* };
+    }
+    set!(
+        bind,
+        port,
+        mode,
+        matches,
+        seed,
+        fill,
+        start_players,
+        deadline_ms
+    );
+    if args.match_config.is_some() {
+        cfg.match_config = args.match_config.clone();
+    }
+    if args.minutes.is_some() {
+        cfg.minutes = args.minutes;
+    }
+    if let Some(t) = &args.blue_token {
+        cfg.tokens.blue = Some(t.clone());
+    }
+    if let Some(t) = &args.red_token {
+        cfg.tokens.red = Some(t.clone());
+    }
+    if let Some(t) = &args.admin_token {
+        cfg.tokens.admin = Some(t.clone());
+    }
+    if args.no_record {
+        cfg.record_dir = None;
+    } else if let Some(dir) = &args.record_dir {
+        cfg.record_dir = Some(dir.clone());
+    } else if cfg.record_dir.is_none() {
+        cfg.record_dir = Some(PathBuf::from("recordings"));
+    }
+    cfg.resolve_match_config()?;
+    Ok(cfg)
+}
+
+pub fn init_logging() {
+    use tracing_subscriber::EnvFilter;
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info"));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .try_init();
+}
+
+pub fn run(args: ServerArgs) -> anyhow::Result<()> {
+    init_logging();
+    let mut cfg = config_from(&args)?;
+    let tokens = cfg.resolve_tokens();
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()?;
+    rt.block_on(async move {
+        let addr = format!("{}:{}", cfg.bind, cfg.port);
+        let listener = TcpListener::bind(&addr)
+            .await
+            .with_context(|| format!("cannot listen on {addr}"))?;
+        let local = listener.local_addr()?;
+        println!(
+            "naosoccer server on {local} ({} mode, {} match(es))",
+            cfg.mode, cfg.matches
+        );
+        println!("blue token:  {}", tokens.blue);
+        println!("red token:   {}", tokens.red);
+        println!("admin token: {}", tokens.admin);
+        let (all_done_tx, all_done) = tokio::sync::watch::channel(false);
+        let mut hooks = Hooks::default();
+        if args.exit_when_done {
+            hooks.observer = Some(Arc::new(done_counter(cfg.matches, all_done_tx)));
+        }
+        let shutdown = async move {
+            let mut all_done = all_done;
+            tokio::select! {
+                _ = signal() => {}
+                _ = all_done.wait_for(|d| *d), if args.exit_when_done => {}
+            }
+        };
+        naosoccer_server::run_with(listener, cfg, hooks, shutdown).await?;
+        Ok(())
+    })
+}
+
+/// An observer factory whose observers count ended matches among the first `n`.
+fn done_counter(
+    n: u32,
+    tx: tokio::sync::watch::Sender<bool>,
+) -> impl Fn(&naosoccer_proto::msg::MatchInfo) -> Option<Box<dyn MatchObserver>> + Send + Sync {
+    struct Count {
+        left: Arc<std::sync::atomic::AtomicU32>,
+        tx: tokio::sync::watch::Sender<bool>,
+    }
+    impl MatchObserver for Count {
+        fn on_start(&mut self, _: &naosoccer_proto::msg::MatchInfo, _: &naosoccer_referee::Match) {}
+        fn on_tick(&mut self, _: &TickRecord<'_>) {}
+        fn on_end(&mut self, _: &naosoccer_proto::msg::MatchEnd, _: &naosoccer_referee::Match) {
+            if self.left.fetch_sub(1, std::sync::atomic::Ordering::SeqCst) == 1 {
+                let _ = self.tx.send(true);
+            }
+        }
+    }
+    let left = Arc::new(std::sync::atomic::AtomicU32::new(n));
+    move |info| {
+        (info.match_id.0 <= u64::from(n)).then(|| {
+            Box::new(Count {
+                left: left.clone(),
+                tx: tx.clone(),
+            }) as Box<_>
+        })
+    }
+}
+
+/// Ctrl-C, or SIGTERM on Unix.
+async fn signal() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{signal, SignalKind};
+        match signal(SignalKind::terminate()) {
+            Ok(mut term) => tokio::select! {
+                _ = tokio::signal::ctrl_c() => {}
+                _ = term.recv() => {}
+            },
+            Err(_) => {
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+    }
+}
+
+/// `naosoccer bench server`.
+#[derive(Args, Debug)]
+pub struct BenchServerArgs {
+    /// Length of the single lockstep match, minutes of game time.
+    #[arg(long, default_value_t = 10.0)]
+    pub minutes: f32,
+    /// Lockstep matches played at once in the second part.
+    #[arg(long, default_value_t = 32)]
+    pub concurrent: u32,
+    /// Length of each of those matches, minutes.
+    #[arg(long, default_value_t = 1.0)]
+    pub concurrent_minutes: f32,
+    /// Real-time matches at once in the third part.
+    #[arg(long, default_value_t = 16)]
+    pub realtime: u32,
+    /// Wall-clock seconds the real-time matches run.
+    #[arg(long, default_value_t = 20.0)]
+    pub realtime_seconds: f32,
+    /// Parts to run, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "single,concurrent,realtime",
+        value_name = "single|concurrent|realtime"
+    )]
+    pub parts: Vec<String>,
+}
+
+struct Latencies(std::sync::Mutex<Vec<std::time::Duration>>);
+
+/// Collects the server's real-time tick lateness through the observer hook.
+struct LatencyObserver(Arc<Latencies>);
+
+impl MatchObserver for LatencyObserver {
+    fn on_start(&mut self, _: &naosoccer_proto::msg::MatchInfo, _: &naosoccer_referee::Match) {}
+    fn on_tick(&mut self, rec: &TickRecord<'_>) {
+        if let Some(l) = rec.lateness {
+            self.0 .0.lock().expect("bench lock").push(l);
+        }
+    }
+    fn on_end(&mut self, _: &naosoccer_proto::msg::MatchEnd, _: &naosoccer_referee::Match) {}
+}
+
+/// Plays `cfg.matches` matches with 8 robot clients each on a fresh server;
+/// returns (wall time, ticks played, client errors, missed robot-ticks).
+async fn bench_round(
+    mut cfg: ServerConfig,
+    hooks: Hooks,
+) -> anyhow::Result<(std::time::Duration, u64, usize, u64)> {
+    use naosoccer_client::robot::{run_team, TeamRun};
+    use naosoccer_client::PolicyKind;
+    use naosoccer_proto::msg::{MatchId, Player};
+    use naosoccer_proto::Team;
+    let tokens = cfg.resolve_tokens();
+    cfg.max_connections = 8 * cfg.matches as usize + 16;
+    cfg.max_matches = cfg.matches as usize;
+    let listener = TcpListener::bind("127.0.0.1:0").await?;
+    let addr = listener.local_addr()?.to_string();
+    let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+    let matches = cfg.matches;
+    let server = tokio::spawn(naosoccer_server::run_with(
+        listener,
+        cfg,
+        hooks,
+        async move {
+            let _ = stop_rx.await;
+        },
+    ));
+    let start = std::time::Instant::now();
+    let mut clients = Vec::new();
+    for id in 1..=matches {
+        for team in Team::BOTH {
+            let run = TeamRun {
+                server: addr.clone(),
+                team,
+                token: tokens.team(team).to_owned(),
+                match_id: Some(MatchId(u64::from(id))),
+                players: Player::all().collect(),
+                policy: PolicyKind::Scripted,
+                team_connection: false,
+            };
+            clients.push(tokio::spawn(async move { run_team(&run).await }));
+        }
+    }
+    let (mut errors, mut ticks, mut misses) = (0, 0, 0);
+    for (i, c) in clients.into_iter().enumerate() {
+        match c.await {
+            Ok(Ok(results)) => {
+                if let Some(r) = results.first() {
+                    let team = if i % 2 == 0 {
+                        &r.end.misses.blue
+                    } else {
+                        &r.end.misses.red
+                    };
+                    misses += team.iter().sum::<u64>();
+                    if i % 2 == 0 {
+                        ticks += r.end.tick;
+                    }
+                }
+            }
+            Ok(Err(e)) => {
+                errors += 1;
+                tracing::error!(error = %e, "bench client failed");
+            }
+            Err(e) => {
+                errors += 1;
+                tracing::error!(error = %e, "bench client panicked");
+            }
+        }
+    }
+    let elapsed = start.elapsed();
+    let _ = stop_tx.send(());
+    server.await??;
+    Ok((elapsed, ticks, errors, misses))
+}
+
+pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
+    init_logging();
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()?;
+    rt.block_on(async move {
+        let mut base = ServerConfig { mode: Mode::Lockstep, ..ServerConfig::default() };
+        base.match_cfg.minutes = args.minutes;
+
+        let run = |part: &str| args.parts.iter().any(|p| p == part);
+        if run("single") {
+        // The floor: the same match in process (physics, referee, policies).
+        let t = std::time::Instant::now();
+        let in_proc_ticks = in_process_ticks(&base.match_cfg, base.seed)?;
+        let in_proc = t.elapsed();
+        println!(
+            "in process, no sockets:        {in_proc_ticks} ticks in {:.2} s = {:.0} ticks/s",
+            in_proc.as_secs_f64(),
+            in_proc_ticks as f64 / in_proc.as_secs_f64()
+        );
+
+        let (el, ticks, errors, misses) = bench_round(base.clone(), Hooks::default()).await?;
+        println!(
+            "1 lockstep match, 8 robot clients: {ticks} ticks in {:.2} s = {:.0} ticks/s (errors {errors}, missed robot-ticks {misses})",
+            el.as_secs_f64(),
+            ticks as f64 / el.as_secs_f64()
+        );
+        }
+
+        if run("concurrent") {
+        let mut many = base.clone();
+        many.matches = args.concurrent;
+        many.match_cfg.minutes = args.concurrent_minutes;
+        let (el, ticks, errors, misses) = bench_round(many, Hooks::default()).await?;
+        println!(
+            "{} lockstep matches at once, {} robot clients: {ticks} ticks in {:.2} s = {:.0} ticks/s in total (errors {errors}, missed robot-ticks {misses})",
+            args.concurrent,
+            8 * args.concurrent,
+            el.as_secs_f64(),
+            ticks as f64 / el.as_secs_f64()
+        );
+        }
+
+        if run("realtime") {
+        let mut rt_cfg = base.clone();
+        rt_cfg.mode = Mode::Realtime;
+        rt_cfg.matches = args.realtime;
+        rt_cfg.match_cfg.minutes = args.realtime_seconds / 60.0;
+        let lat = Arc::new(Latencies(std::sync::Mutex::new(Vec::new())));
+        let hooks = Hooks {
+            observer: Some(Arc::new({
+                let lat = lat.clone();
+                move |_: &naosoccer_proto::msg::MatchInfo| Some(Box::new(LatencyObserver(lat.clone())) as Box<dyn MatchObserver>)
+            })),
+        };
+        let (el, ticks, errors, misses) = bench_round(rt_cfg.clone(), hooks).await?;
+        let mut l = std::mem::take(&mut *lat.0.lock().expect("bench lock"));
+        l.sort_unstable();
+        let pct = |q: f64| l.get(((l.len().max(1) - 1) as f64 * q).round() as usize).copied().unwrap_or_default();
+        println!(
+            "{} realtime matches at {} Hz: {ticks} ticks in {:.2} s; tick lateness p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms (errors {errors}, missed robot-ticks {misses})",
+            args.realtime,
+            rt_cfg.match_cfg.control_hz,
+            el.as_secs_f64(),
+            pct(0.5).as_secs_f64() * 1e3,
+            pct(0.99).as_secs_f64() * 1e3,
+            l.last().copied().unwrap_or_default().as_secs_f64() * 1e3,
+        );
+        }
+        Ok(())
+    })
+}
+
+fn in_process_ticks(cfg: &naosoccer_referee::MatchConfig, seed: u64) -> anyhow::Result<u64> {
+    use naosoccer_client::PolicyKind;
+    use naosoccer_proto::{Action, RobotId, ROBOTS};
+    let mut game = naosoccer_referee::Match::new(cfg, seed)?;
+    let mut policies: Vec<_> = RobotId::all()
+        .map(|r| PolicyKind::Scripted.build(seed, r))
+        .collect();
+    let mut actions = [Action::Stay; ROBOTS];
+    let mut obs = game.observe(naosoccer_proto::Team::Blue, 0);
+    while !game.is_finished() {
+        for r in RobotId::all() {
+            game.observe_into(r.team(), r.player(), &mut obs);
+            actions[r.index()] = policies[r.index()].act(&obs);
+        }
+        game.step(&actions);
+    }
+    Ok(game.tick())
 }

@@ -1,7 +1,16 @@
 //! The robot side of naosoccer: the `Policy` trait, the built-in policies
 //! (scripted, random, idle) and, over the socket protocol, the client library
 //! and the robot client loop.
+//!
+//! - [`framed`]: frames over tokio streams (the server uses it too).
+//! - [`net`]: [`Client`], one connection: handshake, requests, the
+//!   observation/action loop over a [`Policy`].
+//! - [`robot`]: one team's players as robot connections or one team connection.
 
+pub mod framed;
+pub mod net;
 pub mod policy;
+pub mod robot;
 
-pub use policy::{Policy, PolicyKind};
+pub use net::{Client, ClientError, Push};
+pub use policy::{ParsePolicyError, Policy, PolicyKind};

@@ -70,7 +70,8 @@ pub struct RobotId(u8);
 
 impl RobotId {
     pub fn new(team: Team, player: usize) -> Option<RobotId> {
-        (player < PLAYERS_PER_TEAM).then(|| RobotId((team.index() * PLAYERS_PER_TEAM + player) as u8))
+        (player < PLAYERS_PER_TEAM)
+            .then(|| RobotId((team.index() * PLAYERS_PER_TEAM + player) as u8))
     }
     pub fn from_index(i: usize) -> Option<RobotId> {
         (i < ROBOTS).then_some(RobotId(i as u8))
@@ -97,7 +98,8 @@ impl RobotId {
 impl TryFrom<u8> for RobotId {
     type Error = String;
     fn try_from(v: u8) -> Result<Self, Self::Error> {
-        RobotId::from_index(v as usize).ok_or_else(|| format!("robot id {v} out of range 0..{ROBOTS}"))
+        RobotId::from_index(v as usize)
+            .ok_or_else(|| format!("robot id {v} out of range 0..{ROBOTS}"))
     }
 }
 
@@ -108,7 +110,9 @@ impl From<RobotId> for u8 {
 }
 
 /// The paper's five actions. One holds for one control tick.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, Default,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Action {
     Forward,
@@ -229,22 +233,53 @@ impl Observation {
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Event {
     /// A goal for `team` (scored into the other team's goal).
-    Goal { tick: u64, team: Team, scorer: Option<RobotId> },
+    Goal {
+        tick: u64,
+        team: Team,
+        scorer: Option<RobotId>,
+    },
     /// A kick that moved the ball.
-    Kick { tick: u64, robot: RobotId, speed: f32 },
+    Kick {
+        tick: u64,
+        robot: RobotId,
+        speed: f32,
+    },
     /// Possession moved between two teammates after a kick by the first.
-    Pass { tick: u64, from: RobotId, to: RobotId },
-    Fall { tick: u64, robot: RobotId },
-    GetUp { tick: u64, robot: RobotId },
+    Pass {
+        tick: u64,
+        from: RobotId,
+        to: RobotId,
+    },
+    Fall {
+        tick: u64,
+        robot: RobotId,
+    },
+    GetUp {
+        tick: u64,
+        robot: RobotId,
+    },
     /// The ball left the field; it was put back at (x, y). `last_touch` is the
     /// team whose robot touched it last, if known.
-    BallOut { tick: u64, x: f32, y: f32, last_touch: Option<Team> },
+    BallOut {
+        tick: u64,
+        x: f32,
+        y: f32,
+        last_touch: Option<Team>,
+    },
     /// A robot left the field and was reset to its predetermined position.
-    RobotOut { tick: u64, robot: RobotId },
+    RobotOut {
+        tick: u64,
+        robot: RobotId,
+    },
     /// Play (re)starts from the centre: at the start and after each goal.
-    KickOff { tick: u64, team: Team },
+    KickOff {
+        tick: u64,
+        team: Team,
+    },
     /// The clock ran out.
-    End { tick: u64 },
+    End {
+        tick: u64,
+    },
 }
 
 impl Event {

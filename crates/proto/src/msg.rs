@@ -1,0 +1,702 @@
+//! Protocol messages. Every frame carries one JSON object whose `type` field
+//! names the message; serde dispatches on it (internally tagged enums).
+//!
+//! Requests (client to server) each get exactly one reply, in order: a result
+//! message or an [`ErrorMsg`]. Once a join is accepted, the server also
+//! *pushes* [`ObservationMsg`] every tick and one [`MatchEnd`]; the client
+//! answers observations with [`ActionMsg`], which gets no reply unless it is
+//! rejected (the error then says `"in_reply_to": "action"`). See
+//! docs/PROTOCOL.md for the full rules.
+//!
+//! Forward compatibility: unknown fields are ignored everywhere, and an
+//! unknown `type` deserialises to the `Unknown` variant so that the receiver
+//! can answer it (server) or skip it (client) instead of failing.
+
+use crate::types::{Action, MatchStats, Observation, Team, PLAYERS_PER_TEAM};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// Protocol name sent in `hello` and `welcome`.
+pub const PROTOCOL_NAME: &str = "naosoccer";
+
+/// This build's protocol version. Peers must agree on `major`; a higher
+/// `minor` only adds optional fields and message types.
+pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 0 };
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Version {
+    pub major: u32,
+    pub minor: u32,
+}
+
+impl fmt::Display for Version {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}.{}", self.major, self.minor)
+    }
+}
+
+/// A match on a server; assigned by the server, counting from 1.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct MatchId(pub u64);
+
+impl fmt::Display for MatchId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+/// A player number within a team, 0..=3; validated when deserialised.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(try_from = "u8", into = "u8")]
+pub struct Player(u8);
+
+impl Player {
+    pub fn new(n: usize) -> Option<Player> {
+        (n < PLAYERS_PER_TEAM).then_some(Player(n as u8))
+    }
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+    pub fn all() -> impl Iterator<Item = Player> {
+        (0..PLAYERS_PER_TEAM as u8).map(Player)
+    }
+}
+
+impl TryFrom<u8> for Player {
+    type Error = String;
+    fn try_from(v: u8) -> Result<Self, Self::Error> {
+        Player::new(v as usize)
+            .ok_or_else(|| format!("player {v} out of range 0..{PLAYERS_PER_TEAM}"))
+    }
+}
+
+impl From<Player> for u8 {
+    fn from(p: Player) -> u8 {
+        p.0
+    }
+}
+
+impl fmt::Debug for Player {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+impl fmt::Display for Player {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+/// How a match advances.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Mode {
+    /// A tick advances when every joined robot has an action for it, or at
+    /// the deadline (missing actions mean `stay` and are counted as misses).
+    #[default]
+    Lockstep,
+    /// Ticks advance at the configured control rate; an action that arrives
+    /// late applies at the next tick.
+    Realtime,
+}
+
+impl fmt::Display for Mode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Mode::Lockstep => "lockstep",
+            Mode::Realtime => "realtime",
+        })
+    }
+}
+
+impl std::str::FromStr for Mode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "lockstep" => Ok(Mode::Lockstep),
+            "realtime" => Ok(Mode::Realtime),
+            other => Err(format!(
+                "unknown mode {other:?} (expected lockstep or realtime)"
+            )),
+        }
+    }
+}
+
+/// Who plays the slots no client has joined.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Fill {
+    /// The built-in scripted policy.
+    #[default]
+    Scripted,
+    /// The robot stands still.
+    Idle,
+}
+
+impl std::str::FromStr for Fill {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "scripted" => Ok(Fill::Scripted),
+            "idle" => Ok(Fill::Idle),
+            other => Err(format!(
+                "unknown fill {other:?} (expected scripted or idle)"
+            )),
+        }
+    }
+}
+
+/// One value per team.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub struct PerTeam<T> {
+    pub blue: T,
+    pub red: T,
+}
+
+impl<T> PerTeam<T> {
+    pub fn get(&self, team: Team) -> &T {
+        match team {
+            Team::Blue => &self.blue,
+            Team::Red => &self.red,
+        }
+    }
+    pub fn get_mut(&mut self, team: Team) -> &mut T {
+        match team {
+            Team::Blue => &mut self.blue,
+            Team::Red => &mut self.red,
+        }
+    }
+}
+
+/// Goals per team, in world terms (not mirrored).
+pub type Score = PerTeam<u32>;
+
+// ---------------------------------------------------------------- client to server
+
+/// Everything a client sends.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ClientMsg {
+    Hello(Hello),
+    CreateMatch(CreateMatch),
+    ListMatches(ListMatches),
+    Join(Join),
+    Action(ActionMsg),
+    Leave(Leave),
+    Ping(Ping),
+    /// A `type` this build does not know; answered with `unimplemented`.
+    #[serde(other, skip_serializing)]
+    Unknown,
+}
+
+impl ClientMsg {
+    /// The wire name of this message's `type`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ClientMsg::Hello(_) => "hello",
+            ClientMsg::CreateMatch(_) => "create_match",
+            ClientMsg::ListMatches(_) => "list_matches",
+            ClientMsg::Join(_) => "join",
+            ClientMsg::Action(_) => "action",
+            ClientMsg::Leave(_) => "leave",
+            ClientMsg::Ping(_) => "ping",
+            ClientMsg::Unknown => "unknown",
+        }
+    }
+}
+
+/// The first message on every connection.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Hello {
+    /// Must be `"naosoccer"`.
+    pub protocol: String,
+    pub version: Version,
+    /// Free text for the server's logs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub client: Option<String>,
+}
+
+impl Hello {
+    pub fn new(client: impl Into<String>) -> Hello {
+        Hello {
+            protocol: PROTOCOL_NAME.to_owned(),
+            version: PROTOCOL_VERSION,
+            client: Some(client.into()),
+        }
+    }
+}
+
+/// Create a match (admin token). Every field but the token is optional and
+/// defaults to the server's configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct CreateMatch {
+    pub token: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// Match length in minutes of game time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub minutes: Option<f32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mode: Option<Mode>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill: Option<Fill>,
+    /// Robots that must be joined before the first tick (0..=8).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_players: Option<u8>,
+    /// Lockstep: how long a tick waits for actions, in milliseconds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deadline_ms: Option<u64>,
+    /// Fault injection for the server's own tests: the match task panics
+    /// when it reaches this tick. Refused unless the server enables it.
+    #[doc(hidden)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub panic_at_tick: Option<u64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub struct ListMatches {}
+
+/// Take control of one or more players of one team.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Join {
+    /// Omitted: the oldest unfinished match where all requested slots are free.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub match_id: Option<MatchId>,
+    pub team: Team,
+    pub token: String,
+    /// One player: a robot client. Several: a team client.
+    pub players: Vec<Player>,
+}
+
+/// One player's action.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PlayerAction {
+    pub player: Player,
+    pub action: Action,
+}
+
+/// The answer to an observation: actions for (some of) the client's players.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ActionMsg {
+    /// The tick of the observation being answered.
+    pub tick: u64,
+    /// If present, must be the joined team.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub team: Option<Team>,
+    pub actions: Vec<PlayerAction>,
+}
+
+/// [`ActionMsg`] borrowing its actions, so a client can send one per tick
+/// without allocating. Encodes exactly like `ClientMsg::Action`.
+#[derive(Debug, Clone, Copy, Serialize)]
+#[serde(tag = "type", rename = "action")]
+pub struct ActionRef<'a> {
+    pub tick: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub team: Option<Team>,
+    pub actions: &'a [PlayerAction],
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub struct Leave {}
+
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub struct Ping {
+    /// Echoed in the `pong`.
+    #[serde(default)]
+    pub nonce: u64,
+}
+
+// ---------------------------------------------------------------- server to client
+
+/// Everything a server sends.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ServerMsg {
+    Welcome(Welcome),
+    MatchCreated(MatchCreated),
+    MatchList(MatchList),
+    Joined(Joined),
+    Observation(ObservationMsg),
+    MatchEnd(MatchEnd),
+    Left(Left),
+    Pong(Pong),
+    Error(ErrorMsg),
+    /// A `type` this build does not know (from a newer minor version); skip it.
+    #[serde(other, skip_serializing)]
+    Unknown,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Welcome {
+    pub protocol: String,
+    pub version: Version,
+    /// Server software and version, for logs.
+    pub server: String,
+    /// The largest frame payload the server accepts, in bytes.
+    pub max_frame: u32,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MatchCreated {
+    pub info: MatchInfo,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MatchList {
+    pub matches: Vec<MatchInfo>,
+}
+
+/// Where a match is in its life.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MatchState {
+    /// Waiting for `start_players` robots to join.
+    Waiting,
+    Running,
+    Finished,
+}
+
+/// A match as `list_matches` and `match_created` describe it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MatchInfo {
+    pub match_id: MatchId,
+    pub state: MatchState,
+    pub mode: Mode,
+    pub fill: Fill,
+    pub seed: u64,
+    /// Control ticks per second of game time.
+    pub control_hz: f32,
+    /// Ticks played so far, and in the whole match.
+    pub tick: u64,
+    pub total_ticks: u64,
+    /// Lockstep deadline per tick in milliseconds.
+    pub deadline_ms: u64,
+    pub start_players: u8,
+    pub score: Score,
+    /// Which players of each team a client controls.
+    pub taken: PerTeam<[bool; PLAYERS_PER_TEAM]>,
+}
+
+/// The join was accepted; observations follow.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Joined {
+    pub match_id: MatchId,
+    pub team: Team,
+    pub players: Vec<Player>,
+    /// The match seed: built-in policies derive their own streams from it.
+    pub seed: u64,
+    pub mode: Mode,
+    pub control_hz: f32,
+    pub total_ticks: u64,
+    pub deadline_ms: u64,
+}
+
+/// Pushed once per tick to every joined client: one observation per player
+/// it controls, in the order of its `join`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObservationMsg {
+    pub match_id: MatchId,
+    pub tick: u64,
+    pub observations: Vec<Observation>,
+}
+
+/// [`ObservationMsg`] borrowing its observations, so the server encodes each
+/// tick without allocating. Encodes exactly like `ServerMsg::Observation`.
+#[derive(Debug, Clone, Copy, Serialize)]
+#[serde(tag = "type", rename = "observation")]
+pub struct ObservationRef<'a> {
+    pub match_id: MatchId,
+    pub tick: u64,
+    pub observations: &'a [Observation],
+}
+
+/// Why a match ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EndReason {
+    /// The clock ran out.
+    Finished,
+    /// The server is shutting down.
+    Shutdown,
+    /// The match failed inside the server (a bug); an `internal` error
+    /// follows. The server and its other matches go on.
+    Internal,
+}
+
+/// Pushed once when the match ends, to every client still joined; after it
+/// the connection is back in the lobby (it may join again).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MatchEnd {
+    pub match_id: MatchId,
+    pub reason: EndReason,
+    /// Ticks played.
+    pub tick: u64,
+    pub score: Score,
+    pub stats: MatchStats,
+    /// Ticks on which a joined robot had no action in time (it stayed).
+    pub misses: PerTeam<[u64; PLAYERS_PER_TEAM]>,
+    /// The referee's hash of the final state, 16 hex digits: equal for equal
+    /// matches on one build (a string because JSON readers lose u64 precision).
+    pub state_hash: String,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Left {
+    pub match_id: MatchId,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Pong {
+    pub nonce: u64,
+}
+
+/// Stable error codes (the gRPC canonical names, in snake case).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ErrorCode {
+    /// Malformed JSON, a missing or ill-typed field, a value out of range.
+    InvalidArgument,
+    /// The request is valid but not in this state: before `hello`, joining
+    /// twice, a slot already taken, acting without a join, a finished match.
+    FailedPrecondition,
+    /// No such match.
+    NotFound,
+    /// Wrong token, or acting for a player the connection does not control.
+    PermissionDenied,
+    /// Unknown message type, or an unsupported protocol major version.
+    Unimplemented,
+    /// A frame over the cap, or the server is at its connection/match limit.
+    ResourceExhausted,
+    /// An action arrived after its tick was played (lockstep).
+    DeadlineExceeded,
+    /// The server is shutting down.
+    Unavailable,
+    /// A bug in the server.
+    Internal,
+    /// A code from a newer protocol version.
+    #[serde(other)]
+    Unknown,
+}
+
+impl ErrorCode {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ErrorCode::InvalidArgument => "invalid_argument",
+            ErrorCode::FailedPrecondition => "failed_precondition",
+            ErrorCode::NotFound => "not_found",
+            ErrorCode::PermissionDenied => "permission_denied",
+            ErrorCode::Unimplemented => "unimplemented",
+            ErrorCode::ResourceExhausted => "resource_exhausted",
+            ErrorCode::DeadlineExceeded => "deadline_exceeded",
+            ErrorCode::Unavailable => "unavailable",
+            ErrorCode::Internal => "internal",
+            ErrorCode::Unknown => "unknown",
+        }
+    }
+}
+
+impl fmt::Display for ErrorCode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// The error reply. `fatal: true` means the server closes the connection
+/// right after sending it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ErrorMsg {
+    pub code: ErrorCode,
+    pub message: String,
+    pub fatal: bool,
+    /// The `type` of the message this answers, when known.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub in_reply_to: Option<String>,
+    /// For rejected actions: the tick the action named.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tick: Option<u64>,
+}
+
+impl ErrorMsg {
+    pub fn new(code: ErrorCode, message: impl Into<String>) -> ErrorMsg {
+        ErrorMsg {
+            code,
+            message: message.into(),
+            fatal: false,
+            in_reply_to: None,
+            tick: None,
+        }
+    }
+    pub fn fatal(mut self) -> ErrorMsg {
+        self.fatal = true;
+        self
+    }
+    pub fn in_reply_to(mut self, kind: &str) -> ErrorMsg {
+        self.in_reply_to = Some(kind.to_owned());
+        self
+    }
+}
+
+impl fmt::Display for ErrorMsg {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.code, self.message)?;
+        if self.fatal {
+            f.write_str(" (fatal)")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for ErrorMsg {}
+
+impl From<ErrorMsg> for ServerMsg {
+    fn from(e: ErrorMsg) -> ServerMsg {
+        ServerMsg::Error(e)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::types::{BallObs, RobotObs, ScoreObs};
+
+    fn obs(player: u8) -> Observation {
+        Observation {
+            tick: 7,
+            team: Team::Red,
+            player,
+            time_left: 599.3,
+            score: ScoreObs {
+                own: 1,
+                opponent: 2,
+            },
+            own: [RobotObs {
+                x: -1.5,
+                y: 0.25,
+                heading: 0.1,
+                fallen: false,
+            }; 4],
+            opponents: [RobotObs {
+                x: 1.0,
+                y: -0.3,
+                heading: 3.1,
+                fallen: true,
+            }; 4],
+            ball: BallObs {
+                x: 0.123_456_79,
+                y: -2.0e-7,
+                vx: 0.0,
+                vy: 1.5,
+            },
+            control: [false, true, false, false],
+            opponent_control: false,
+        }
+    }
+
+    #[test]
+    fn borrowed_forms_encode_like_owned() {
+        let observations = vec![obs(0), obs(3)];
+        let owned = ServerMsg::Observation(ObservationMsg {
+            match_id: MatchId(4),
+            tick: 7,
+            observations: observations.clone(),
+        });
+        let borrowed = ObservationRef {
+            match_id: MatchId(4),
+            tick: 7,
+            observations: &observations,
+        };
+        assert_eq!(
+            serde_json::to_string(&owned).unwrap(),
+            serde_json::to_string(&borrowed).unwrap()
+        );
+        let back: ServerMsg =
+            serde_json::from_str(&serde_json::to_string(&borrowed).unwrap()).unwrap();
+        assert_eq!(back, owned);
+
+        let actions = vec![PlayerAction {
+            player: Player(2),
+            action: Action::TurnLeft,
+        }];
+        let owned = ClientMsg::Action(ActionMsg {
+            tick: 3,
+            team: None,
+            actions: actions.clone(),
+        });
+        let borrowed = ActionRef {
+            tick: 3,
+            team: None,
+            actions: &actions,
+        };
+        assert_eq!(
+            serde_json::to_string(&owned).unwrap(),
+            serde_json::to_string(&borrowed).unwrap()
+        );
+    }
+
+    #[test]
+    fn unknown_types_and_fields() {
+        let m: ClientMsg = serde_json::from_str(r#"{"type":"teleport","x":1}"#).unwrap();
+        assert_eq!(m, ClientMsg::Unknown);
+        let m: ClientMsg =
+            serde_json::from_str(r#"{"nonce":5,"type":"ping","extra":[1,2]}"#).unwrap();
+        assert_eq!(m, ClientMsg::Ping(Ping { nonce: 5 }));
+        let m: ClientMsg = serde_json::from_str(r#"{"type":"list_matches","x":{}}"#).unwrap();
+        assert_eq!(m, ClientMsg::ListMatches(ListMatches {}));
+        let m: ServerMsg = serde_json::from_str(r#"{"type":"weather","rain":true}"#).unwrap();
+        assert_eq!(m, ServerMsg::Unknown);
+        let e: ErrorMsg =
+            serde_json::from_str(r#"{"code":"quota","message":"m","fatal":false}"#).unwrap();
+        assert_eq!(e.code, ErrorCode::Unknown);
+    }
+
+    #[test]
+    fn player_numbers_validated() {
+        assert!(serde_json::from_str::<Player>("3").is_ok());
+        assert!(serde_json::from_str::<Player>("4").is_err());
+        let bad = r#"{"type":"join","team":"blue","token":"t","players":[0,9]}"#;
+        assert!(serde_json::from_str::<ClientMsg>(bad).is_err());
+    }
+
+    #[test]
+    fn f32_fields_round_trip_exactly() {
+        // Observations cross the socket as JSON; the end-to-end test relies on
+        // the client seeing the very same f32 values the referee produced.
+        let mut x = 1.0e-6f32;
+        while x < 1.0e4 {
+            for v in [x, -x, x * 1.000_001, x.next_up_compat()] {
+                let s = serde_json::to_string(&v).unwrap();
+                let back: f32 = serde_json::from_str(&s).unwrap();
+                assert_eq!(back.to_bits(), v.to_bits(), "{v} -> {s}");
+            }
+            x *= 1.37;
+        }
+    }
+
+    #[test]
+    fn f64_statistics_round_trip_exactly() {
+        for (a, b) in [
+            (20u32, 22u32),
+            (1, 3),
+            (10, 11),
+            (2, 22),
+            (5999, 6000),
+            (1, 7),
+        ] {
+            let v = f64::from(a) / f64::from(b);
+            let back: f64 = serde_json::from_str(&serde_json::to_string(&v).unwrap()).unwrap();
+            assert_eq!(back.to_bits(), v.to_bits(), "{a}/{b}");
+        }
+    }
+
+    trait NextUp {
+        fn next_up_compat(self) -> Self;
+    }
+    impl NextUp for f32 {
+        fn next_up_compat(self) -> f32 {
+            f32::from_bits(self.to_bits() + 1)
+        }
+    }
+}

@@ -1,0 +1,51 @@
+//! The per-match observer seam: whoever wants to see a match tick by tick
+//! (the MCAP recorder, benchmarks) implements [`MatchObserver`]; the server
+//! asks [`Hooks::observer`] for one when it creates a match and calls it
+//! from the match task, in tick order.
+
+use naosoccer_proto::msg::{MatchEnd, MatchInfo};
+use naosoccer_proto::{Action, Event, ROBOTS};
+use naosoccer_referee::Match;
+use std::sync::Arc;
+use std::time::Duration;
+
+/// One played tick, as the match task saw it.
+#[derive(Clone, Copy)]
+pub struct TickRecord<'a> {
+    /// The match after the tick (its `tick()` is one past the played tick).
+    pub game: &'a Match,
+    /// The tick that was played.
+    pub tick: u64,
+    /// The actions applied, robot index order (misses already turned into `stay`).
+    pub actions: &'a [Action; ROBOTS],
+    pub events: &'a [Event],
+    /// Real-time mode: how long after its scheduled instant the tick started.
+    pub lateness: Option<Duration>,
+}
+
+/// Sees one match. Runs on the match task, so it must be quick (or hand the
+/// data to its own task).
+pub trait MatchObserver: Send {
+    /// Before the first tick, with the match at kick-off.
+    fn on_start(&mut self, info: &MatchInfo, game: &Match);
+    fn on_tick(&mut self, record: &TickRecord<'_>);
+    /// After the last tick (or at shutdown).
+    fn on_end(&mut self, end: &MatchEnd, game: &Match);
+}
+
+/// Makes an observer for each new match, or `None` to leave it unobserved.
+pub type ObserverFactory = dyn Fn(&MatchInfo) -> Option<Box<dyn MatchObserver>> + Send + Sync;
+
+/// Extension points of a server.
+#[derive(Clone, Default)]
+pub struct Hooks {
+    pub observer: Option<Arc<ObserverFactory>>,
+}
+
+impl std::fmt::Debug for Hooks {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Hooks")
+            .field("observer", &self.observer.is_some())
+            .finish()
+    }
+}

@@ -1,0 +1,85 @@
+//! Helpers shared by the server tests (included with `#[path]`): a real
+//! server on 127.0.0.1:0 and the in-process reference match.
+#![allow(dead_code)]
+
+use naosoccer_client::PolicyKind;
+use naosoccer_proto::msg::Score;
+use naosoccer_proto::MatchStats;
+use naosoccer_referee::MatchConfig;
+use naosoccer_server::{ServerConfig, ServerError, TokenConfig};
+use std::net::SocketAddr;
+use tokio::net::TcpListener;
+use tokio::sync::oneshot;
+use tokio::task::JoinHandle;
+
+pub const BLUE: &str = "blue-secret";
+pub const RED: &str = "red-secret";
+pub const ADMIN: &str = "admin-secret";
+
+pub struct TestServer {
+    pub addr: SocketAddr,
+    stop: Option<oneshot::Sender<()>>,
+    task: JoinHandle<Result<(), ServerError>>,
+}
+
+/// A server config with fixed tokens and a short match of `ticks` ticks.
+pub fn config(ticks: u32) -> ServerConfig {
+    let mut cfg = ServerConfig {
+        tokens: TokenConfig {
+            blue: Some(BLUE.into()),
+            red: Some(RED.into()),
+            admin: Some(ADMIN.into()),
+        },
+        seed: 42,
+        ..ServerConfig::default()
+    };
+    cfg.match_cfg.minutes = ticks as f32 / (60.0 * cfg.match_cfg.control_hz);
+    cfg
+}
+
+pub async fn start(cfg: ServerConfig) -> TestServer {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let (tx, rx) = oneshot::channel::<()>();
+    let task = tokio::spawn(naosoccer_server::run(listener, cfg, async move {
+        let _ = rx.await;
+    }));
+    TestServer {
+        addr,
+        stop: Some(tx),
+        task,
+    }
+}
+
+impl TestServer {
+    pub fn addr(&self) -> String {
+        self.addr.to_string()
+    }
+
+    /// Triggers graceful shutdown and waits until the server has finished.
+    pub async fn stop(mut self) {
+        let _ = self.stop.take().unwrap().send(());
+        self.task.await.unwrap().unwrap();
+    }
+}
+
+/// The same match played in process by the CLI's runner (`naosoccer match`):
+/// stats, score, ticks and the final state hash as `match_end` writes it.
+pub fn in_process(
+    cfg: &MatchConfig,
+    seed: u64,
+    blue: PolicyKind,
+    red: PolicyKind,
+) -> (MatchStats, Score, u64, String) {
+    let out = naosoccer::runner::play_match(cfg, seed, &blue, &red, |_| {}).unwrap();
+    let score = Score {
+        blue: out.score.blue,
+        red: out.score.red,
+    };
+    (
+        out.stats,
+        score,
+        out.ticks,
+        format!("{:016x}", out.state_hash),
+    )
+}
