@@ -5,11 +5,37 @@ use clap::Subcommand;
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
     /// Bare physics floor vs a full in-process match, and the real-time factor.
-    Sim,
+    ///
+    /// Steps the bare rapier world (the match's very bodies, moved about by
+    /// the cheapest possible driving: no gait model, no rules, no policies)
+    /// as many times as a whole match does, then plays that match in process
+    /// (physics, referee, scripted policies on both sides), and prints both
+    /// wall times, their ratio and the real-time factor. Build with
+    /// `--release` for meaningful figures.
+    Sim(super::play::BenchSimArgs),
+    /// The match server over loopback TCP, with real robot clients.
+    ///
+    /// One lockstep match with 8 robot clients (control ticks a second, and
+    /// the same match in process for comparison), many lockstep matches at
+    /// once (errors and missed ticks counted), and real-time matches at the
+    /// configured rate (99th-percentile tick lateness). Build with
+    /// `--release` for meaningful figures.
+    Server(super::server::BenchServerArgs),
+    /// PPO training speed end to end, in robot transitions a second.
+    ///
+    /// Trains PPO against the scripted team (matches side by side, one
+    /// batched forward pass for every robot of every match, the updates
+    /// included), then steps the same environment with random actions alone,
+    /// and prints both rates. Build with `--release` for meaningful figures.
+    #[cfg(feature = "learn")]
+    Learn(super::learn::BenchLearnArgs),
 }
 
 pub fn run(b: BenchCommand) -> anyhow::Result<()> {
     match b {
-        BenchCommand::Sim => anyhow::bail!("`bench sim` is being built"),
+        BenchCommand::Sim(args) => super::play::bench_sim(args),
+        BenchCommand::Server(args) => super::server::bench(args),
+        #[cfg(feature = "learn")]
+        BenchCommand::Learn(args) => super::learn::bench_learn(args),
     }
 }

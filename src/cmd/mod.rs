@@ -1,5 +1,8 @@
 //! One module per subcommand (or family of subcommands).
 pub mod bench;
 pub mod client;
+#[cfg(feature = "learn")]
+pub mod learn;
 pub mod play;
+pub mod record;
 pub mod server;

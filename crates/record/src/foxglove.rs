@@ -221,9 +221,25 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
     for side in [-1.0f32, 1.0] {
         let x_line = side * (hl + post / 2.0);
         for y in [-(gw + post / 2.0), gw + post / 2.0] {
-            cubes.push(cube(x_line, y, (gh + post) / 2.0, post, post, gh + post, white.clone()));
+            cubes.push(cube(
+                x_line,
+                y,
+                (gh + post) / 2.0,
+                post,
+                post,
+                gh + post,
+                white.clone(),
+            ));
         }
-        cubes.push(cube(x_line, 0.0, gh + post / 2.0, post, 2.0 * gw + 2.0 * post, post, white.clone()));
+        cubes.push(cube(
+            x_line,
+            0.0,
+            gh + post / 2.0,
+            post,
+            2.0 * gw + 2.0 * post,
+            post,
+            white.clone(),
+        ));
         cubes.push(cube(
             side * (hl + depth / 2.0),
             0.0,
@@ -238,7 +254,11 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
 
     let mut entities = vec![Value::Object(pitch)];
     for (i, frame) in ROBOT_FRAMES.iter().enumerate() {
-        let team = if i < ROBOTS / 2 { Team::Blue } else { Team::Red };
+        let team = if i < ROBOTS / 2 {
+            Team::Blue
+        } else {
+            Team::Red
+        };
         let color = team_color(team);
         let mut e = entity(0, frame, frame, true);
         // Torso origin is the frame origin; legs below, head above (NAO H25
@@ -277,8 +297,7 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
             "color": rgba(1.0, 0.55, 0.0, 1.0)}]),
     );
     entities.push(Value::Object(ball));
-    serde_json::to_vec(&json!({"deletions": [], "entities": entities}))
-        .expect("scene serialises")
+    serde_json::to_vec(&json!({"deletions": [], "entities": entities})).expect("scene serialises")
 }
 
 /// Yaw, then a tilt about the robot's own y axis (enough to show a robot
@@ -312,7 +331,13 @@ pub fn write_transforms(out: &mut Vec<u8>, ns: u64, s: &StateRecord) {
     };
     out.extend_from_slice(br#"{"transforms":["#);
     for (i, r) in s.robots.iter().enumerate() {
-        tf(out, ROBOT_FRAMES[i], [r.x, r.y, r.z], robot_rotation(r.heading, r.tilt), false);
+        tf(
+            out,
+            ROBOT_FRAMES[i],
+            [r.x, r.y, r.z],
+            robot_rotation(r.heading, r.tilt),
+            false,
+        );
     }
     let b = &s.ball;
     tf(out, BALL_FRAME, [b.x, b.y, b.z], [0.0, 0.0, 0.0, 1.0], true);

@@ -77,9 +77,8 @@ impl Recording {
         if truncated.is_none() && mcap::read::footer(bytes).is_err() {
             truncated = Some("the file ends before its summary and footer".into());
         }
-        let meta = meta.ok_or_else(|| {
-            RecordError::NotARecording(format!("no {} message", topics::META))
-        })?;
+        let meta =
+            meta.ok_or_else(|| RecordError::NotARecording(format!("no {} message", topics::META)))?;
         if meta.format != RECORDING_FORMAT {
             return Err(RecordError::UnsupportedFormat {
                 found: meta.format,

@@ -107,20 +107,31 @@ impl<W: Write + Seek> Recorder<W> {
             .profile("")
             .library(format!("naosoccer {}", env!("CARGO_PKG_VERSION")));
         let mut writer = options.create(w)?;
-        let json_schema = |w: &mut Writer<W>, name: &str, data: &[u8]| {
-            w.add_schema(name, "jsonschema", data)
-        };
+        let json_schema =
+            |w: &mut Writer<W>, name: &str, data: &[u8]| w.add_schema(name, "jsonschema", data);
         let meta_s = json_schema(&mut writer, "naosoccer.MatchMeta", b"{\"type\":\"object\"}")?;
-        let act_s = json_schema(&mut writer, "naosoccer.TickActions", b"{\"type\":\"object\"}")?;
+        let act_s = json_schema(
+            &mut writer,
+            "naosoccer.TickActions",
+            b"{\"type\":\"object\"}",
+        )?;
         let state_s = json_schema(&mut writer, "naosoccer.State", b"{\"type\":\"object\"}")?;
         let event_s = json_schema(&mut writer, "naosoccer.Event", b"{\"type\":\"object\"}")?;
-        let stats_s = json_schema(&mut writer, "naosoccer.FinalStats", b"{\"type\":\"object\"}")?;
+        let stats_s = json_schema(
+            &mut writer,
+            "naosoccer.FinalStats",
+            b"{\"type\":\"object\"}",
+        )?;
         let scene_s = json_schema(
             &mut writer,
             foxglove::SCENE_SCHEMA_NAME,
             &foxglove::scene_schema(),
         )?;
-        let tf_s = json_schema(&mut writer, foxglove::TF_SCHEMA_NAME, &foxglove::tf_schema())?;
+        let tf_s = json_schema(
+            &mut writer,
+            foxglove::TF_SCHEMA_NAME,
+            &foxglove::tf_schema(),
+        )?;
         let schemas = [meta_s, act_s, state_s, event_s, stats_s, scene_s, tf_s];
         let mut channel_ids = [0u16; 7];
         for (i, topic) in topics::ALL.iter().enumerate() {
@@ -158,7 +169,12 @@ impl<W: Write + Seek> Recorder<W> {
         Ok(())
     }
 
-    fn write_json<T: Serialize>(&mut self, ch: Ch, log_time: u64, v: &T) -> Result<(), RecordError> {
+    fn write_json<T: Serialize>(
+        &mut self,
+        ch: Ch,
+        log_time: u64,
+        v: &T,
+    ) -> Result<(), RecordError> {
         let mut buf = std::mem::take(&mut self.buf);
         buf.clear();
         let r = serde_json::to_writer(&mut buf, v)

@@ -92,7 +92,12 @@ fn same_seed_gives_the_same_bytes() {
     let cfg = short_config(20.0);
     let (a, _) = record(&cfg, 11, RecorderOptions::default());
     let (b, _) = record(&cfg, 11, RecorderOptions::default());
-    assert!(a == b, "two recordings of seed 11 differ ({} vs {} bytes)", a.len(), b.len());
+    assert!(
+        a == b,
+        "two recordings of seed 11 differ ({} vs {} bytes)",
+        a.len(),
+        b.len()
+    );
     let (c, _) = record(&cfg, 12, RecorderOptions::default());
     assert!(a != c);
 }
@@ -117,7 +122,11 @@ fn tampered_action_is_found_at_its_tick() {
             recorded,
             replayed,
         } => {
-            assert_eq!(tick, tampered as u64 + 1, "the state after the tampered tick");
+            assert_eq!(
+                tick,
+                tampered as u64 + 1,
+                "the state after the tampered tick"
+            );
             assert_ne!(recorded.state_hash, replayed.state_hash);
         }
         other => panic!("tampering went unnoticed: {other:?}"),

@@ -1,0 +1,296 @@
+//! `naosoccer replay` and `naosoccer render`: recordings after the fact.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::Args;
+use naosoccer_proto::{Event, Team, ROBOTS};
+use naosoccer_record::{replay, Recording, ReplayOutcome};
+
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Exit codes: 0 every recorded tick was reproduced bit for bit; \
+1 a tick differs (the first one is printed with both states); \
+2 identical as far as it goes, but the recording was cut short; \
+3 the file could not be read as a naosoccer recording."
+)]
+pub struct ReplayArgs {
+    /// The recording (.mcap) to re-simulate.
+    pub file: PathBuf,
+    /// Print the match statistics stored in the file instead of re-simulating.
+    #[arg(long)]
+    pub summary: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// The recording (.mcap) to draw.
+    pub file: PathBuf,
+    /// Where to write the PNG.
+    #[arg(long, short)]
+    pub out: PathBuf,
+    /// Image width in pixels (the height follows the pitch's proportions).
+    #[arg(long, default_value_t = 1400)]
+    pub width: u32,
+}
+
+pub fn replay_cmd(args: ReplayArgs) -> ExitCode {
+    let rec = match Recording::read_file(&args.file) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {}: {e}", args.file.display());
+            return ExitCode::from(3);
+        }
+    };
+    if args.summary {
+        print_summary(&rec);
+        return if rec.is_complete() {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::from(2)
+        };
+    }
+    match replay(&rec) {
+        Ok(ReplayOutcome::Identical { ticks, truncated }) => {
+            if truncated {
+                println!(
+                    "identical ({ticks} ticks), but the recording was cut short: {}",
+                    rec.truncated
+                        .as_deref()
+                        .unwrap_or("it has no final statistics")
+                );
+                ExitCode::from(2)
+            } else {
+                println!("identical ({ticks} ticks)");
+                ExitCode::SUCCESS
+            }
+        }
+        Ok(ReplayOutcome::Diverged {
+            tick,
+            recorded,
+            replayed,
+        }) => {
+            println!("differs at tick {tick}");
+            let pretty = |s: &naosoccer_record::StateRecord| {
+                serde_json::to_string_pretty(s).unwrap_or_else(|e| e.to_string())
+            };
+            let (a, b) = (pretty(&recorded), pretty(&replayed));
+            println!("{:<60} | replayed", "recorded");
+            for (l, r) in a.lines().zip(b.lines()) {
+                let mark = if l == r { ' ' } else { '*' };
+                println!("{l:<60} |{mark}{r}");
+            }
+            ExitCode::from(1)
+        }
+        Err(e) => {
+            eprintln!("error: {}: {e}", args.file.display());
+            ExitCode::from(3)
+        }
+    }
+}
+
+fn print_summary(rec: &Recording) {
+    let m = &rec.meta;
+    println!(
+        "naosoccer recording (format {}, naosoccer {}), source {}{}",
+        m.format,
+        m.naosoccer_version,
+        m.source,
+        m.match_id
+            .map(|id| format!(", match {id}"))
+            .unwrap_or_default()
+    );
+    println!(
+        "seed {}, blue: {}, red: {}, {} ticks planned at {} Hz",
+        m.seed, m.blue, m.red, m.total_ticks, m.control_hz
+    );
+    match &rec.stats {
+        Some(f) => {
+            println!(
+                "final score: blue {} - {} red after {} ticks{}",
+                f.score.blue,
+                f.score.red,
+                f.ticks,
+                if f.completed { "" } else { " (stopped early)" }
+            );
+            println!(
+                "{:<6} {:>6} {:>8} {:>7} {:>6} {:>6} {:>5}",
+                "team", "goals", "control", "passes", "shots", "falls", "outs"
+            );
+            for team in Team::BOTH {
+                let s = f.stats.team(team);
+                println!(
+                    "{:<6} {:>6} {:>7.1}% {:>7} {:>6} {:>6} {:>5}",
+                    team.to_string(),
+                    s.goals,
+                    100.0 * s.control_rate,
+                    s.passes,
+                    s.shots,
+                    s.falls,
+                    s.out_of_bounds
+                );
+            }
+        }
+        None => println!(
+            "no final statistics: the recording was cut short after {} ticks ({})",
+            rec.actions.len(),
+            rec.truncated.as_deref().unwrap_or("no summary")
+        ),
+    }
+    let goals = rec
+        .events
+        .iter()
+        .filter(|e| matches!(e, Event::Goal { .. }))
+        .count();
+    println!("{} events ({} goals)", rec.events.len(), goals);
+    for (topic, n) in &rec.counts {
+        println!("  {topic:<18} {n:>7} messages");
+    }
+}
+
+pub fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
+    use plotters::prelude::*;
+
+    let rec = Recording::read_file(&args.file)
+        .with_context(|| format!("reading {}", args.file.display()))?;
+    if let Some(why) = &rec.truncated {
+        eprintln!("warning: the recording was cut short ({why}); drawing what it holds");
+    }
+    let sim = &rec.meta.config.sim;
+    let (hl, hw) = (sim.field_length / 2.0, sim.field_width / 2.0);
+    let margin = sim.ground_margin.max(sim.goal_depth) as f64;
+    let (x0, x1) = (-(hl as f64) - margin, hl as f64 + margin);
+    let (y0, y1) = (-(hw as f64) - margin, hw as f64 + margin);
+    let width = args.width.max(200);
+    let height = ((width as f64) * (y1 - y0) / (x1 - x0)).round() as u32;
+
+    let root = BitMapBackend::new(&args.out, (width, height)).into_drawing_area();
+    root.fill(&RGBColor(28, 110, 40))?;
+    let mut chart = ChartBuilder::on(&root).build_cartesian_2d(x0..x1, y0..y1)?;
+    let white = ShapeStyle::from(&WHITE).stroke_width(3);
+    let (hl, hw) = (hl as f64, hw as f64);
+    chart.draw_series(std::iter::once(PathElement::new(
+        vec![(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw), (-hl, -hw)],
+        white,
+    )))?;
+    chart.draw_series(std::iter::once(PathElement::new(
+        vec![(0.0, -hw), (0.0, hw)],
+        white,
+    )))?;
+    chart.draw_series(std::iter::once(PathElement::new(
+        (0..=64)
+            .map(|i| {
+                let a = i as f64 / 64.0 * std::f64::consts::TAU;
+                (0.75 * a.cos(), 0.75 * a.sin())
+            })
+            .collect::<Vec<_>>(),
+        white,
+    )))?;
+    let gw = (sim.goal_width / 2.0) as f64;
+    let depth = sim.goal_depth as f64;
+    for side in [-1.0, 1.0] {
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![
+                (side * hl, -gw),
+                (side * (hl + depth), -gw),
+                (side * (hl + depth), gw),
+                (side * hl, gw),
+            ],
+            ShapeStyle::from(&RGBColor(230, 230, 230)).stroke_width(4),
+        )))?;
+    }
+
+    let shades = |team: Team, player: usize| -> RGBColor {
+        let k = 40 * player as u8;
+        match team {
+            Team::Blue => RGBColor(40 + k, 90 + k, 255),
+            Team::Red => RGBColor(255, 50 + k, 40 + k),
+        }
+    };
+    for r in 0..ROBOTS {
+        let team = if r < ROBOTS / 2 {
+            Team::Blue
+        } else {
+            Team::Red
+        };
+        let color = shades(team, r % (ROBOTS / 2));
+        let path: Vec<(f64, f64)> = rec
+            .states
+            .iter()
+            .map(|s| (s.robots[r].x as f64, s.robots[r].y as f64))
+            .collect();
+        chart.draw_series(split_at_jumps(&path).map(|seg| {
+            PathElement::new(seg.to_vec(), ShapeStyle::from(&color.mix(0.55)).stroke_width(2))
+        }))?;
+        if let Some(&(x, y)) = path.last() {
+            chart.draw_series(std::iter::once(Circle::new((x, y), 9, color.filled())))?;
+        }
+    }
+    let ball: Vec<(f64, f64)> = rec
+        .states
+        .iter()
+        .map(|s| (s.ball.x as f64, s.ball.y as f64))
+        .collect();
+    chart.draw_series(split_at_jumps(&ball).map(|seg| {
+        PathElement::new(
+            seg.to_vec(),
+            ShapeStyle::from(&RGBColor(255, 150, 0)).stroke_width(2),
+        )
+    }))?;
+    // Goals: where the ball crossed, as a ring in the scoring team's colour.
+    for e in &rec.events {
+        if let Event::Goal { tick, team, .. } = e {
+            let at = rec
+                .states
+                .iter()
+                .rev()
+                .find(|s| s.tick < *tick)
+                .map(|s| (s.ball.x as f64, s.ball.y as f64));
+            if let Some(p) = at {
+                chart.draw_series(std::iter::once(Circle::new(
+                    p,
+                    16,
+                    ShapeStyle::from(&shades(*team, 0)).stroke_width(5),
+                )))?;
+                chart.draw_series(std::iter::once(Circle::new(p, 6, YELLOW.filled())))?;
+            }
+        }
+    }
+    root.present()
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    println!(
+        "wrote {} ({} ticks, {} goals)",
+        args.out.display(),
+        rec.states.len().saturating_sub(1),
+        rec.events
+            .iter()
+            .filter(|e| matches!(e, Event::Goal { .. }))
+            .count()
+    );
+    Ok(())
+}
+
+/// A path split where it jumps (a reset after a goal or an out): no body
+/// moves 0.6 m in one tick, so such a step is a placement, not motion.
+fn split_at_jumps(path: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f64)]> {
+    let mut start = 0;
+    let mut i = 1;
+    std::iter::from_fn(move || {
+        while i < path.len() {
+            let (a, b) = (path[i - 1], path[i]);
+            i += 1;
+            if (a.0 - b.0).hypot(a.1 - b.1) > 0.6 {
+                let seg = &path[start..i - 1];
+                start = i - 1;
+                return Some(seg);
+            }
+        }
+        if start < path.len() {
+            let seg = &path[start..];
+            start = path.len();
+            return Some(seg);
+        }
+        None
+    })
+}
