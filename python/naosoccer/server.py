@@ -65,7 +65,8 @@ class LocalServer:
 
     ``args`` are extra command-line options (e.g. ``["--minutes", "1"]``).
     By default no match is created at start (``--matches 0``): clients create
-    their own with the admin token. Use as a context manager or call
+    their own with the admin token. Matches are recorded to ``record_dir``
+    when it is given (MCAP, one file per match), else not at all. Use as a context manager or call
     :meth:`stop`; the process is also stopped when the object is collected or
     the interpreter exits.
     """
@@ -77,9 +78,11 @@ class LocalServer:
         *,
         matches: int = 0,
         startup_timeout: float = 60.0,
+        record_dir: Optional[str] = None,
     ) -> None:
         self.binary = find_binary(binary)
-        cmd = [self.binary, "server", "--bind", "127.0.0.1", "--port", "0", "--matches", str(matches), *args]
+        record = ["--record-dir", str(record_dir)] if record_dir else ["--no-record"]
+        cmd = [self.binary, "server", "--bind", "127.0.0.1", "--port", "0", "--matches", str(matches), *record, *args]
         # The server logs to stderr; a file keeps a chatty server from
         # filling a pipe nobody reads, and keeps the log for error messages.
         self._log: IO[bytes] = tempfile.TemporaryFile(prefix="naosoccer-server-", suffix=".log")

@@ -1,1 +1,30 @@
 //! Learning: the MDP over `referee::Match`, DQN and PPO on tch.
+//!
+//! - [`obs`]: the observation vector (versioned layout, see docs/LEARNING.md).
+//! - [`env`]: many matches in process, stepped together; the learning team's
+//!   robots flattened into one batch; built-in, frozen or self-play opponents.
+//! - [`ppo`], [`dqn`]: the two algorithms as the paper describes them (PPO
+//!   also with a CleanRL preset).
+//! - [`train`]: training runs (config, metrics CSV, safetensors checkpoints).
+//! - [`policy`]: trained networks as the client's `Policy` ([`load_policy`]).
+//! - [`eval`]: many matches between two teams; Table I with 95% CIs.
+//! - [`plot`]: training curves (Figures 4-6).
+//!
+//! The reward is the referee's (`Match::rewards`): its weights are part of the
+//! match configuration.
+
+pub mod dqn;
+pub mod env;
+mod error;
+pub mod eval;
+pub mod nets;
+pub mod obs;
+pub mod plot;
+pub mod policy;
+pub mod ppo;
+pub mod train;
+
+pub use error::LearnError;
+pub use obs::{ObsScale, OBS_DIM, OBS_VERSION};
+pub use policy::{load_policy, LearnedPolicy};
+pub use train::{train, Algo, OpponentSpec, TrainConfig};

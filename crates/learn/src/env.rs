@@ -1,0 +1,443 @@
+//! The vectorised environment: many `referee::Match`es in process, stepped
+//! together, with the learning team's robots flattened into one batch.
+//!
+//! Row order everywhere: match-major, then learning robot (`m * L + k` for
+//! match `m` and the `k`-th entry of `learners`). Each match lets the learner
+//! play blue in even-numbered matches and red in odd ones; observations are
+//! mirrored by the referee, so both sides look alike to the network.
+//!
+//! Matches are independent, so stepping them on several threads gives the
+//! same results as on one: each match's seed depends only on the base seed,
+//! its index and its episode number.
+
+use naosoccer_client::{Policy, PolicyKind};
+use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_referee::{Match, MatchConfig};
+
+use crate::obs::{ObsScale, OBS_DIM};
+use crate::LearnError;
+
+/// Who plays against the learner.
+pub enum Opponent {
+    /// A built-in policy, one instance per robot.
+    Builtin(PolicyKind),
+    /// A network (frozen checkpoint or self-play snapshot), batched over all
+    /// matches.
+    Net(Box<dyn BatchActor>),
+}
+
+impl Opponent {
+    fn builtin_kind(&self) -> Option<PolicyKind> {
+        match self {
+            Opponent::Builtin(k) => Some(*k),
+            Opponent::Net(_) => None,
+        }
+    }
+}
+
+/// Picks actions for many robots from their observation vectors at once.
+pub trait BatchActor: Send {
+    /// `obs` holds `out.len()` rows of `OBS_DIM`.
+    fn act_rows(&mut self, obs: &[f32], out: &mut [usize]);
+}
+
+/// What one finished episode (a whole match) showed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Episode {
+    pub match_index: usize,
+    pub learner_team: Team,
+    pub goals_for: u32,
+    pub goals_against: u32,
+    /// Sum of each learning robot's rewards, indexed like `learners`.
+    pub returns: Vec<f32>,
+    pub stats: naosoccer_proto::MatchStats,
+    pub ticks: u64,
+}
+
+/// How the environment is laid out.
+#[derive(Debug, Clone)]
+pub struct EnvConfig {
+    pub matches: usize,
+    /// Players (0..4) the network controls; the others play `teammates`.
+    pub learners: Vec<usize>,
+    pub teammates: PolicyKind,
+    /// Threads that step matches.
+    pub threads: usize,
+    pub seed: u64,
+}
+
+struct Slot {
+    index: usize,
+    m: Match,
+    team: Team,
+    episode: u64,
+    /// Observations of all eight robots, by robot index.
+    obs: Vec<Observation>,
+    /// Built-in policies by robot index (none where a network decides).
+    policies: Vec<Option<Box<dyn Policy>>>,
+    returns: Vec<f32>,
+    finished: Option<Episode>,
+}
+
+/// The vectorised environment.
+pub struct VecEnv {
+    cfg: MatchConfig,
+    env: EnvConfig,
+    scale: ObsScale,
+    slots: Vec<Slot>,
+    opponent: Opponent,
+    /// Learner observation vectors, `[matches * L, OBS_DIM]`.
+    feats: Vec<f32>,
+    rewards: Vec<f32>,
+    dones: Vec<bool>,
+    opp_feats: Vec<f32>,
+    opp_actions: Vec<usize>,
+    ticks: u64,
+}
+
+/// The seed of match `index`'s `episode`-th episode: a splitmix64 mix, so
+/// neighbouring matches and episodes get unrelated streams.
+pub fn episode_seed(seed: u64, index: usize, episode: u64) -> u64 {
+    let mut z = seed
+        ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ episode.wrapping_mul(0xD1B5_4A32_D192_ED03);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+impl VecEnv {
+    pub fn new(
+        cfg: &MatchConfig,
+        env: EnvConfig,
+        opponent: Opponent,
+    ) -> Result<VecEnv, LearnError> {
+        if env.matches == 0 {
+            return Err(LearnError::Config("at least one match is needed".into()));
+        }
+        if env.learners.is_empty() || env.learners.iter().any(|&p| p >= PLAYERS_PER_TEAM) {
+            return Err(LearnError::Config(format!(
+                "learning players must be a non-empty subset of 0..{PLAYERS_PER_TEAM}, got {:?}",
+                env.learners
+            )));
+        }
+        let l = env.learners.len();
+        let mut slots = Vec::with_capacity(env.matches);
+        for index in 0..env.matches {
+            let team = if index % 2 == 0 {
+                Team::Blue
+            } else {
+                Team::Red
+            };
+            let m = Match::new(cfg, episode_seed(env.seed, index, 0))?;
+            let mut slot = Slot {
+                index,
+                obs: (0..ROBOTS)
+                    .map(|_| naosoccer_referee::blank_observation())
+                    .collect(),
+                policies: Vec::new(),
+                returns: vec![0.0; l],
+                m,
+                team,
+                episode: 0,
+                finished: None,
+            };
+            slot.build_policies(&env, opponent.builtin_kind());
+            slot.observe_all();
+            slots.push(slot);
+        }
+        let scale = ObsScale::from_config(cfg);
+        let mut venv = VecEnv {
+            cfg: cfg.clone(),
+            feats: vec![0.0; env.matches * l * OBS_DIM],
+            rewards: vec![0.0; env.matches * l],
+            dones: vec![false; env.matches * l],
+            opp_feats: Vec::new(),
+            opp_actions: Vec::new(),
+            env,
+            scale,
+            slots,
+            opponent,
+            ticks: 0,
+        };
+        for (slot, f) in venv.slots.iter().zip(venv.feats.chunks_mut(l * OBS_DIM)) {
+            slot.encode_learners(&venv.env.learners, &venv.scale, f);
+        }
+        Ok(venv)
+    }
+
+    /// Rows in every batch: matches times learning robots.
+    pub fn rows(&self) -> usize {
+        self.env.matches * self.env.learners.len()
+    }
+
+    pub fn learners(&self) -> &[usize] {
+        &self.env.learners
+    }
+
+    pub fn scale(&self) -> ObsScale {
+        self.scale
+    }
+
+    pub fn match_config(&self) -> &MatchConfig {
+        &self.cfg
+    }
+
+    /// Control ticks stepped so far, summed over matches.
+    pub fn ticks(&self) -> u64 {
+        self.ticks
+    }
+
+    /// The current observation vectors, `[rows, OBS_DIM]`.
+    pub fn observations(&self) -> &[f32] {
+        &self.feats
+    }
+
+    /// Rewards of the last step, per row.
+    pub fn rewards(&self) -> &[f32] {
+        &self.rewards
+    }
+
+    /// Whether each row's episode ended with the last step (its observation
+    /// is then already the first of the next episode).
+    pub fn dones(&self) -> &[bool] {
+        &self.dones
+    }
+
+    /// Replaces the opponent (self-play: a newer snapshot).
+    pub fn set_opponent(&mut self, opponent: Opponent) {
+        let kind = opponent.builtin_kind();
+        self.opponent = opponent;
+        for slot in &mut self.slots {
+            slot.build_policies(&self.env, kind);
+        }
+    }
+
+    /// Applies one action per row and steps every match one control tick;
+    /// finished matches restart with their next episode's seed. Returns the
+    /// episodes that ended.
+    pub fn step(&mut self, actions: &[usize]) -> Result<Vec<Episode>, LearnError> {
+        let l = self.env.learners.len();
+        assert_eq!(actions.len(), self.rows(), "one action per learning robot");
+        let net_opponent = if let Opponent::Net(actor) = &mut self.opponent {
+            let n = self.env.matches * PLAYERS_PER_TEAM;
+            self.opp_feats.resize(n * OBS_DIM, 0.0);
+            self.opp_actions.resize(n, 0);
+            for (slot, f) in self
+                .slots
+                .iter()
+                .zip(self.opp_feats.chunks_mut(PLAYERS_PER_TEAM * OBS_DIM))
+            {
+                let base = slot.team.other().index() * PLAYERS_PER_TEAM;
+                for p in 0..PLAYERS_PER_TEAM {
+                    self.scale
+                        .encode(&slot.obs[base + p], &mut f[p * OBS_DIM..(p + 1) * OBS_DIM]);
+                }
+            }
+            actor.act_rows(&self.opp_feats, &mut self.opp_actions);
+            true
+        } else {
+            false
+        };
+        let threads = self.env.threads.clamp(1, self.env.matches);
+        let per = self.env.matches.div_ceil(threads);
+        let cfg = &self.cfg;
+        let env = &self.env;
+        let scale = &self.scale;
+        let opp_kind = self.opponent.builtin_kind();
+        let opp_actions: &[usize] = if net_opponent { &self.opp_actions } else { &[] };
+        let work = self
+            .slots
+            .chunks_mut(per)
+            .zip(actions.chunks(per * l))
+            .zip(self.feats.chunks_mut(per * l * OBS_DIM))
+            .zip(self.rewards.chunks_mut(per * l))
+            .zip(self.dones.chunks_mut(per * l))
+            .enumerate();
+        let results: Vec<Result<(), LearnError>> = if threads == 1 {
+            work.map(|(c, ((((slots, a), f), r), d))| {
+                step_chunk(
+                    cfg,
+                    env,
+                    scale,
+                    opp_kind,
+                    slots,
+                    a,
+                    opp_chunk(opp_actions, c, per),
+                    f,
+                    r,
+                    d,
+                )
+            })
+            .collect()
+        } else {
+            std::thread::scope(|s| {
+                let handles: Vec<_> = work
+                    .map(|(c, ((((slots, a), f), r), d))| {
+                        let opp = opp_chunk(opp_actions, c, per);
+                        s.spawn(move || {
+                            step_chunk(cfg, env, scale, opp_kind, slots, a, opp, f, r, d)
+                        })
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                    .collect()
+            })
+        };
+        for r in results {
+            r?;
+        }
+        self.ticks += self.env.matches as u64;
+        Ok(self
+            .slots
+            .iter_mut()
+            .filter_map(|s| s.finished.take())
+            .collect())
+    }
+}
+
+fn opp_chunk(opp: &[usize], chunk: usize, per: usize) -> &[usize] {
+    if opp.is_empty() {
+        return opp;
+    }
+    let n = per * PLAYERS_PER_TEAM;
+    let start = (chunk * n).min(opp.len());
+    &opp[start..(start + n).min(opp.len())]
+}
+
+#[allow(clippy::too_many_arguments)]
+fn step_chunk(
+    cfg: &MatchConfig,
+    env: &EnvConfig,
+    scale: &ObsScale,
+    opp_kind: Option<PolicyKind>,
+    slots: &mut [Slot],
+    actions: &[usize],
+    opp_actions: &[usize],
+    feats: &mut [f32],
+    rewards: &mut [f32],
+    dones: &mut [bool],
+) -> Result<(), LearnError> {
+    let l = env.learners.len();
+    for (j, slot) in slots.iter_mut().enumerate() {
+        let opp = if opp_actions.is_empty() {
+            None
+        } else {
+            Some(&opp_actions[j * PLAYERS_PER_TEAM..(j + 1) * PLAYERS_PER_TEAM])
+        };
+        let done = slot.step(
+            env,
+            &actions[j * l..(j + 1) * l],
+            opp,
+            &mut rewards[j * l..(j + 1) * l],
+        );
+        dones[j * l..(j + 1) * l].fill(done);
+        if done {
+            slot.restart(cfg, env, opp_kind)?;
+        }
+        slot.encode_learners(
+            &env.learners,
+            scale,
+            &mut feats[j * l * OBS_DIM..(j + 1) * l * OBS_DIM],
+        );
+    }
+    Ok(())
+}
+
+impl Slot {
+    /// Fresh built-in policies for this episode (they are seeded by the match
+    /// seed); `opp_kind` is `None` when a network plays the opponents.
+    fn build_policies(&mut self, env: &EnvConfig, opp_kind: Option<PolicyKind>) {
+        let seed = self.m.seed();
+        self.policies = RobotId::all()
+            .map(|r| {
+                if r.team() == self.team {
+                    (!env.learners.contains(&r.player())).then(|| env.teammates.build(seed, r))
+                } else {
+                    opp_kind.map(|k| k.build(seed, r))
+                }
+            })
+            .collect();
+    }
+
+    fn observe_all(&mut self) {
+        for r in RobotId::all() {
+            self.m
+                .observe_into(r.team(), r.player(), &mut self.obs[r.index()]);
+        }
+    }
+
+    fn encode_learners(&self, learners: &[usize], scale: &ObsScale, out: &mut [f32]) {
+        let base = self.team.index() * PLAYERS_PER_TEAM;
+        for (k, &p) in learners.iter().enumerate() {
+            scale.encode(
+                &self.obs[base + p],
+                &mut out[k * OBS_DIM..(k + 1) * OBS_DIM],
+            );
+        }
+    }
+
+    /// One control tick; returns whether the match ended.
+    fn step(
+        &mut self,
+        env: &EnvConfig,
+        actions: &[usize],
+        opp: Option<&[usize]>,
+        rewards: &mut [f32],
+    ) -> bool {
+        let mut joint = [Action::Stay; ROBOTS];
+        let own = self.team.index() * PLAYERS_PER_TEAM;
+        let other = self.team.other().index() * PLAYERS_PER_TEAM;
+        for (k, &p) in env.learners.iter().enumerate() {
+            joint[own + p] = Action::from_index(actions[k]).unwrap_or(Action::Stay);
+        }
+        if let Some(opp) = opp {
+            for p in 0..PLAYERS_PER_TEAM {
+                joint[other + p] = Action::from_index(opp[p]).unwrap_or(Action::Stay);
+            }
+        }
+        for (i, policy) in self.policies.iter_mut().enumerate() {
+            if let Some(policy) = policy {
+                joint[i] = policy.act(&self.obs[i]);
+            }
+        }
+        self.m.step(&joint);
+        let r = self.m.rewards(self.team);
+        for (k, &p) in env.learners.iter().enumerate() {
+            rewards[k] = r[p];
+            self.returns[k] += r[p];
+        }
+        self.observe_all();
+        self.m.is_finished()
+    }
+
+    fn restart(
+        &mut self,
+        cfg: &MatchConfig,
+        env: &EnvConfig,
+        opp_kind: Option<PolicyKind>,
+    ) -> Result<(), LearnError> {
+        let (blue, red) = self.m.score();
+        let (gf, ga) = if self.team == Team::Blue {
+            (blue, red)
+        } else {
+            (red, blue)
+        };
+        self.finished = Some(Episode {
+            match_index: self.index,
+            learner_team: self.team,
+            goals_for: gf,
+            goals_against: ga,
+            returns: std::mem::replace(&mut self.returns, vec![0.0; env.learners.len()]),
+            stats: self.m.stats(),
+            ticks: self.m.tick(),
+        });
+        self.episode += 1;
+        self.m = Match::new(cfg, episode_seed(env.seed, self.index, self.episode))?;
+        self.build_policies(env, opp_kind);
+        self.observe_all();
+        Ok(())
+    }
+}

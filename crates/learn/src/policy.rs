@@ -1,0 +1,327 @@
+//! Trained networks as players: [`LearnedPolicy`] implements the client's
+//! `Policy` (so the robot client loop plays it over the socket) and the
+//! environment's `BatchActor` (so evaluation and self-play run every robot
+//! of every match in one forward pass). Actions are greedy.
+//!
+//! A run directory holds `config.json` (the training configuration, which
+//! says how to rebuild the networks) and `final.safetensors` (or, while a run
+//! is going, `checkpoints/step-N.safetensors`).
+
+use std::path::{Path, PathBuf};
+
+use naosoccer_client::Policy;
+use naosoccer_proto::{Action, Observation, PLAYERS_PER_TEAM};
+use tch::nn::VarStore;
+use tch::{Kind, Tensor};
+
+use crate::dqn::{argmax, QNet};
+use crate::env::BatchActor;
+use crate::obs::{ObsScale, OBS_DIM, OBS_VERSION};
+use crate::ppo::{ActorCritic, ACTIONS};
+use crate::train::{Algo, TrainConfig};
+use crate::LearnError;
+
+enum Model {
+    Ppo(ActorCritic),
+    /// One network per entry of `learners`, or one shared.
+    Dqn(Vec<QNet>),
+}
+
+/// A trained team policy.
+pub struct LearnedPolicy {
+    name: String,
+    scale: ObsScale,
+    learners: Vec<usize>,
+    model: Model,
+    feats: Vec<f32>,
+    rows: Vec<f32>,
+    out: Vec<f32>,
+    players: Vec<usize>,
+}
+
+impl std::fmt::Debug for LearnedPolicy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LearnedPolicy")
+            .field("name", &self.name)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Loads `ppo:DIR`, `dqn:DIR` (a run directory) or `ppo:FILE.safetensors`
+/// (a checkpoint inside a run directory) as a boxed `Policy`.
+pub fn load_policy(spec: &str) -> Result<Box<dyn Policy>, LearnError> {
+    Ok(Box::new(LearnedPolicy::load(spec)?))
+}
+
+/// Where a run directory keeps its configuration and weights.
+pub fn resolve_run(path: &Path) -> Result<(PathBuf, PathBuf), LearnError> {
+    if path.extension().is_some_and(|e| e == "safetensors") {
+        // checkpoints/step-N.safetensors -> the run directory two levels up.
+        let mut dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        if !dir.join("config.json").exists() {
+            dir = dir.parent().map(Path::to_path_buf).unwrap_or_default();
+        }
+        return Ok((dir.join("config.json"), path.to_path_buf()));
+    }
+    let cfg = path.join("config.json");
+    let fin = path.join("final.safetensors");
+    if fin.exists() {
+        return Ok((cfg, fin));
+    }
+    latest_checkpoint(path)
+        .map(|c| (cfg, c))
+        .ok_or_else(|| LearnError::Spec {
+            spec: path.display().to_string(),
+            reason: "no final.safetensors and no checkpoints/step-*.safetensors in it".into(),
+        })
+}
+
+fn latest_checkpoint(dir: &Path) -> Option<PathBuf> {
+    let rd = std::fs::read_dir(dir.join("checkpoints")).ok()?;
+    let mut best: Option<(u64, PathBuf)> = None;
+    for e in rd.flatten() {
+        let p = e.path();
+        let Some(n) = p
+            .file_name()
+            .and_then(|n| n.to_str())
+            .and_then(|n| n.strip_prefix("step-"))
+            .and_then(|n| n.strip_suffix(".safetensors"))
+            .and_then(|n| n.parse::<u64>().ok())
+        else {
+            continue;
+        };
+        if best.as_ref().is_none_or(|(b, _)| n > *b) {
+            best = Some((n, p));
+        }
+    }
+    best.map(|(_, p)| p)
+}
+
+impl LearnedPolicy {
+    /// Parses `algo:PATH` and loads it; the algorithm must match the run's.
+    pub fn load(spec: &str) -> Result<LearnedPolicy, LearnError> {
+        let bad = |reason: &str| LearnError::Spec {
+            spec: spec.to_string(),
+            reason: reason.to_string(),
+        };
+        let (algo, path) = spec
+            .split_once(':')
+            .ok_or_else(|| bad("expected ppo:DIR or dqn:DIR"))?;
+        let algo: Algo = algo.parse().map_err(|e: String| bad(&e))?;
+        let (cfg_path, weights) = resolve_run(Path::new(path))?;
+        let text = std::fs::read_to_string(&cfg_path).map_err(|e| LearnError::io(&cfg_path, e))?;
+        let cfg: TrainConfig = serde_json::from_str(&text).map_err(|e| LearnError::Json {
+            path: cfg_path.clone(),
+            source: e,
+        })?;
+        if cfg.algo != algo {
+            return Err(bad(&format!("{} was trained with {}", path, cfg.algo)));
+        }
+        if cfg.obs_version != OBS_VERSION {
+            return Err(LearnError::ObsVersion {
+                path: cfg_path,
+                found: cfg.obs_version,
+                expected: OBS_VERSION,
+            });
+        }
+        let mut p = LearnedPolicy::untrained(&cfg, format!("{algo}:{path}"));
+        p.load_weights(&weights)?;
+        Ok(p)
+    }
+
+    /// The networks `cfg` describes, freshly initialised.
+    pub fn untrained(cfg: &TrainConfig, name: String) -> LearnedPolicy {
+        let model = match cfg.algo {
+            Algo::Ppo => Model::Ppo(ActorCritic::new(&cfg.ppo)),
+            Algo::Dqn => {
+                let n = if cfg.dqn.shared {
+                    1
+                } else {
+                    cfg.learners.len()
+                };
+                Model::Dqn(
+                    (0..n)
+                        .map(|i| QNet::new(&cfg.dqn.hidden, &format!("q{i}")))
+                        .collect(),
+                )
+            }
+        };
+        LearnedPolicy {
+            name,
+            scale: cfg.obs_scale,
+            learners: cfg.learners.clone(),
+            model,
+            feats: vec![0.0; OBS_DIM],
+            rows: Vec::new(),
+            out: Vec::new(),
+            players: Vec::new(),
+        }
+    }
+
+    fn stores(&self) -> Vec<&VarStore> {
+        match &self.model {
+            Model::Ppo(ac) => vec![&ac.vs],
+            Model::Dqn(nets) => nets.iter().map(|n| &n.vs).collect(),
+        }
+    }
+
+    /// Copies the weights of live training networks (self-play snapshots).
+    pub fn copy_from(&mut self, src: &[&VarStore]) -> Result<(), LearnError> {
+        match &mut self.model {
+            Model::Ppo(ac) => ac.vs.copy(src[0])?,
+            Model::Dqn(nets) => {
+                for (n, s) in nets.iter_mut().zip(src) {
+                    n.vs.copy(s)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    pub fn load_weights(&mut self, path: &Path) -> Result<(), LearnError> {
+        match &mut self.model {
+            Model::Ppo(ac) => ac.vs.load(path)?,
+            Model::Dqn(nets) => {
+                for n in nets {
+                    n.vs.load(path)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Greedy actions for rows of observation vectors; `players[i]` is the
+    /// player number of row `i`.
+    pub fn act_rows_players(&mut self, obs: &[f32], players: &[usize], out: &mut [usize]) {
+        let n = out.len();
+        match &self.model {
+            Model::Ppo(ac) => {
+                let x = Tensor::from_slice(&obs[..n * OBS_DIM]).view([n as i64, OBS_DIM as i64]);
+                let logits = tch::no_grad(|| ac.logits(&x)).to_kind(Kind::Float);
+                self.out.resize(n * ACTIONS, 0.0);
+                logits.copy_data(&mut self.out, n * ACTIONS);
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = argmax(&self.out[i * ACTIONS..(i + 1) * ACTIONS]);
+                }
+            }
+            Model::Dqn(nets) => {
+                for (k, net) in nets.iter().enumerate() {
+                    self.rows.clear();
+                    let mut idx = Vec::new();
+                    for i in 0..n {
+                        if net_index(&self.learners, nets.len(), players[i]) == k {
+                            idx.push(i);
+                            self.rows
+                                .extend_from_slice(&obs[i * OBS_DIM..(i + 1) * OBS_DIM]);
+                        }
+                    }
+                    if idx.is_empty() {
+                        continue;
+                    }
+                    let m = idx.len();
+                    let x = Tensor::from_slice(&self.rows).view([m as i64, OBS_DIM as i64]);
+                    let q = tch::no_grad(|| net.q(&x));
+                    self.out.resize(m * ACTIONS, 0.0);
+                    q.copy_data(&mut self.out, m * ACTIONS);
+                    for (j, &i) in idx.iter().enumerate() {
+                        out[i] = argmax(&self.out[j * ACTIONS..(j + 1) * ACTIONS]);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The raw network outputs for `n` rows: PPO's action logits, or DQN's
+    /// Q-values (of the network of player `player`), `n * 5` values.
+    pub fn outputs(&self, obs: &[f32], player: usize) -> Vec<f32> {
+        let n = obs.len() / OBS_DIM;
+        let x = Tensor::from_slice(obs).view([n as i64, OBS_DIM as i64]);
+        let y = tch::no_grad(|| match &self.model {
+            Model::Ppo(ac) => ac.logits(&x),
+            Model::Dqn(nets) => nets[net_index(&self.learners, nets.len(), player)].q(&x),
+        });
+        let mut out = vec![0.0; n * ACTIONS];
+        y.to_kind(Kind::Float).copy_data(&mut out, n * ACTIONS);
+        out
+    }
+
+    pub fn scale(&self) -> ObsScale {
+        self.scale
+    }
+}
+
+/// The DQN network for `player`: per-robot networks follow the training
+/// run's `learners` order; a player that did not learn uses the first.
+fn net_index(learners: &[usize], nets: usize, player: usize) -> usize {
+    if nets <= 1 {
+        return 0;
+    }
+    learners.iter().position(|&p| p == player).unwrap_or(0)
+}
+
+/// Saves several stores into one safetensors file (their variable names are
+/// distinct by construction).
+pub fn save_stores(stores: &[&VarStore], path: &Path) -> Result<(), LearnError> {
+    let mut named: Vec<(String, Tensor)> = Vec::new();
+    for vs in stores {
+        let mut vars: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
+        // Sorted, so the same weights give the same file bytes.
+        vars.sort_by(|a, b| a.0.cmp(&b.0));
+        named.extend(vars);
+    }
+    Tensor::write_safetensors(&named, path)?;
+    Ok(())
+}
+
+impl LearnedPolicy {
+    pub fn save(&self, path: &Path) -> Result<(), LearnError> {
+        save_stores(&self.stores(), path)
+    }
+}
+
+impl Policy for LearnedPolicy {
+    fn act(&mut self, obs: &Observation) -> Action {
+        let mut feats = std::mem::take(&mut self.feats);
+        self.scale.encode(obs, &mut feats);
+        let mut out = [0usize];
+        self.act_rows_players(&feats, &[obs.player as usize % PLAYERS_PER_TEAM], &mut out);
+        self.feats = feats;
+        Action::from_index(out[0]).unwrap_or(Action::Stay)
+    }
+
+    fn act_batch(&mut self, obs: &[Observation], out: &mut [Action]) {
+        let n = obs.len().min(out.len());
+        let mut feats = std::mem::take(&mut self.feats);
+        feats.resize(n * OBS_DIM, 0.0);
+        let mut players = std::mem::take(&mut self.players);
+        players.clear();
+        for (i, o) in obs.iter().take(n).enumerate() {
+            self.scale
+                .encode(o, &mut feats[i * OBS_DIM..(i + 1) * OBS_DIM]);
+            players.push(o.player as usize % PLAYERS_PER_TEAM);
+        }
+        let mut acts = vec![0usize; n];
+        self.act_rows_players(&feats, &players, &mut acts);
+        for (o, a) in out.iter_mut().zip(acts) {
+            *o = Action::from_index(a).unwrap_or(Action::Stay);
+        }
+        feats.truncate(OBS_DIM);
+        self.feats = feats;
+        self.players = players;
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+}
+
+impl BatchActor for LearnedPolicy {
+    /// Rows are whole teams in player order (`i % 4` is the player).
+    fn act_rows(&mut self, obs: &[f32], out: &mut [usize]) {
+        let mut players = std::mem::take(&mut self.players);
+        players.clear();
+        players.extend((0..out.len()).map(|i| i % PLAYERS_PER_TEAM));
+        self.act_rows_players(obs, &players, out);
+        self.players = players;
+    }
+}

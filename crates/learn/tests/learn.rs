@@ -1,0 +1,204 @@
+//! The learning crate on the real `Match`: tiny tasks that DQN and PPO must
+//! learn within a test-sized budget, checkpoints that load to identical
+//! outputs, and repeatable training.
+
+use std::path::{Path, PathBuf};
+
+use naosoccer_client::PolicyKind;
+use naosoccer_learn::env::{EnvConfig, Opponent, VecEnv};
+use naosoccer_learn::train::{train, Algo, OpponentSpec, TrainConfig};
+use naosoccer_learn::{LearnedPolicy, OBS_DIM};
+use naosoccer_referee::MatchConfig;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// libtorch's generator is global to the process: trainings in parallel test
+/// threads would draw their initial weights from it in a racy order.
+static TORCH: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn torch_lock() -> std::sync::MutexGuard<'static, ()> {
+    TORCH.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// A fresh directory under the target dir (tests leave their runs there to
+/// inspect; each test uses its own name).
+fn out_dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// The tiny task: one robot (player 1, which starts just behind the ball
+/// at its team's kick-off or 1 m away when defending), everybody else
+/// standing still, 6-second episodes. The referee's reward pays for being
+/// close to the ball and, most, for controlling it; so the robot must walk
+/// to the ball facing it and stay there.
+fn tiny_config(algo: Algo, seed: u64) -> TrainConfig {
+    let m = MatchConfig {
+        minutes: 0.1,
+        ..MatchConfig::default()
+    };
+    let mut c = TrainConfig::new(algo, m);
+    c.seed = seed;
+    c.matches = 8;
+    c.threads = 2;
+    c.learners = vec![1];
+    c.teammates = "idle".into();
+    c.opponent = OpponentSpec::Builtin("idle".into());
+    c.checkpoint_every = 0;
+    c
+}
+
+/// Mean episode return (per learning robot) over `episodes` whole episodes,
+/// the actions coming from `decide`.
+fn mean_return(cfg: &TrainConfig, seed: u64, mut decide: impl FnMut(&[f32], &mut [usize])) -> f64 {
+    let mut env = VecEnv::new(
+        &cfg.match_config,
+        EnvConfig {
+            matches: 8,
+            learners: cfg.learners.clone(),
+            teammates: PolicyKind::Idle,
+            threads: 2,
+            seed,
+        },
+        Opponent::Builtin(PolicyKind::Idle),
+    )
+    .unwrap();
+    let mut actions = vec![0usize; env.rows()];
+    let mut returns = Vec::new();
+    while returns.len() < 16 {
+        let obs = env.observations().to_vec();
+        decide(&obs, &mut actions);
+        for e in env.step(&actions).unwrap() {
+            returns.extend(e.returns.iter().map(|&r| f64::from(r)));
+        }
+    }
+    returns.iter().sum::<f64>() / returns.len() as f64
+}
+
+fn random_return(cfg: &TrainConfig) -> f64 {
+    let mut rng = ChaCha8Rng::seed_from_u64(99);
+    mean_return(cfg, 1234, |_, a| {
+        a.iter_mut().for_each(|x| *x = rng.random_range(0..5))
+    })
+}
+
+fn learned_return(cfg: &TrainConfig, dir: &Path) -> f64 {
+    let spec = format!("{}:{}", cfg.algo, dir.display());
+    let mut p = LearnedPolicy::load(&spec).unwrap();
+    let players = vec![1usize; 8];
+    mean_return(cfg, 1234, |obs, a| p.act_rows_players(obs, &players, a))
+}
+
+#[test]
+fn ppo_learns_the_tiny_task_and_beats_random() {
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let mut cfg = tiny_config(Algo::Ppo, 1);
+    cfg.steps = 30_000;
+    cfg.ppo.rollout = 64;
+    let dir = out_dir("ppo_tiny");
+    train(&cfg, &dir, &mut |_| {}).unwrap();
+    let (random, learned) = (random_return(&cfg), learned_return(&cfg, &dir));
+    eprintln!("tiny task, PPO: random {random:.3}, learned {learned:.3}");
+    assert!(
+        learned > random * 1.25,
+        "PPO {learned:.3} does not beat random {random:.3}"
+    );
+}
+
+#[test]
+fn dqn_learns_the_tiny_task_and_beats_random() {
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let mut cfg = tiny_config(Algo::Dqn, 1);
+    cfg.steps = 40_000;
+    cfg.dqn.warmup = 500;
+    let dir = out_dir("dqn_tiny");
+    train(&cfg, &dir, &mut |_| {}).unwrap();
+    let (random, learned) = (random_return(&cfg), learned_return(&cfg, &dir));
+    eprintln!("tiny task, DQN: random {random:.3}, learned {learned:.3}");
+    assert!(
+        learned > random * 1.25,
+        "DQN {learned:.3} does not beat random {random:.3}"
+    );
+}
+
+fn probe_rows() -> Vec<f32> {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    (0..16 * OBS_DIM)
+        .map(|_| rng.random_range(-1.0..1.0))
+        .collect()
+}
+
+#[test]
+fn checkpoints_load_to_identical_outputs() {
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    for algo in [Algo::Ppo, Algo::Dqn] {
+        let mut cfg = tiny_config(algo, 3);
+        cfg.learners = vec![0, 1, 2, 3];
+        cfg.steps = 2 * 64 * 8 * 4;
+        cfg.ppo.rollout = 64;
+        cfg.ppo.epochs = 2;
+        cfg.dqn.warmup = 128;
+        cfg.checkpoint_every = 64 * 8 * 4;
+        let dir = out_dir(&format!("roundtrip_{algo}"));
+        let summary = train(&cfg, &dir, &mut |_| {}).unwrap();
+        let rows = probe_rows();
+        let a = LearnedPolicy::load(&format!("{algo}:{}", dir.display())).unwrap();
+        let b =
+            LearnedPolicy::load(&format!("{algo}:{}", summary.final_weights.display())).unwrap();
+        let fresh = LearnedPolicy::untrained(&cfg, "fresh".into());
+        for player in 0..4 {
+            let (ya, yb, yf) = (
+                a.outputs(&rows, player),
+                b.outputs(&rows, player),
+                fresh.outputs(&rows, player),
+            );
+            assert_eq!(ya, yb, "{algo}: the same file loads to the same outputs");
+            assert_ne!(
+                ya, yf,
+                "{algo}: trained weights differ from a fresh network's"
+            );
+        }
+        // Saving what was loaded writes the same weights again.
+        let again = dir.join("again.safetensors");
+        a.save(&again).unwrap();
+        let mut c = LearnedPolicy::untrained(&cfg, "c".into());
+        c.load_weights(&again).unwrap();
+        assert_eq!(c.outputs(&rows, 2), a.outputs(&rows, 2));
+        let ckpt = dir.join(format!("checkpoints/step-{}.safetensors", 64 * 8 * 4));
+        assert!(ckpt.exists(), "periodic checkpoint written");
+        LearnedPolicy::load(&format!("{algo}:{}", ckpt.display())).unwrap();
+    }
+}
+
+#[test]
+fn same_seed_and_threads_give_identical_metrics() {
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    for algo in [Algo::Ppo, Algo::Dqn] {
+        let run = |seed: u64, name: &str| {
+            let mut cfg = tiny_config(algo, seed);
+            cfg.steps = 3 * 32 * 8;
+            cfg.ppo.rollout = 32;
+            cfg.ppo.epochs = 3;
+            cfg.dqn.warmup = 64;
+            cfg.dqn.batch = 32;
+            cfg.log_every = 32;
+            let dir = out_dir(&format!("{name}_{algo}"));
+            train(&cfg, &dir, &mut |_| {}).unwrap();
+            std::fs::read_to_string(dir.join("metrics.csv")).unwrap()
+        };
+        let a = run(11, "repeat_a");
+        let b = run(11, "repeat_b");
+        let c = run(12, "repeat_c");
+        assert_eq!(a, b, "{algo}: same seed, same metrics");
+        assert_ne!(a, c, "{algo}: another seed, other metrics");
+        assert!(
+            a.lines().count() >= 4,
+            "{algo}: a header and three rows:\n{a}"
+        );
+    }
+}

@@ -1,0 +1,354 @@
+//! `naosoccer train | eval | plot` and `bench learn`: the learning crate on
+//! the command line. Wall-clock rates are measured here, at the edge; the
+//! library's results never depend on them.
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use naosoccer_learn::eval::{format_table, play_matches, summarise, Side};
+use naosoccer_learn::ppo::{PpoConfig, Preset};
+use naosoccer_learn::train::{train, Algo, OpponentSpec, TrainConfig};
+use naosoccer_referee::MatchConfig;
+
+/// The match configuration: a TOML file or the defaults (assets/match.toml),
+/// optionally with another match length.
+fn match_config(path: Option<&PathBuf>, minutes: Option<f32>) -> anyhow::Result<MatchConfig> {
+    let mut cfg = match path {
+        Some(p) => MatchConfig::from_file(p).with_context(|| format!("reading {}", p.display()))?,
+        None => MatchConfig::default(),
+    };
+    if let Some(m) = minutes {
+        anyhow::ensure!(m > 0.0, "--minutes must be positive, got {m}");
+        cfg.minutes = m;
+    }
+    Ok(cfg)
+}
+
+fn parse_players(s: &str) -> Result<Vec<usize>, String> {
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|p| {
+            p.trim()
+                .parse::<usize>()
+                .map_err(|_| format!("bad player number {p:?}"))
+        })
+        .collect::<Result<_, _>>()?;
+    if v.is_empty() || v.iter().any(|&p| p > 3) {
+        return Err(format!("players are 0..=3, got {s:?}"));
+    }
+    Ok(v)
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Examples:
+  naosoccer train --algo ppo --steps 2000000 --seed 1 --out runs/ppo-1
+  naosoccer train --algo dqn --steps 2000000 --seed 1 --out runs/dqn-1
+  naosoccer train --algo ppo --preset cleanrl --opponent self-play:200000 --out runs/ppo-sp
+
+The run directory gets config.json (everything the run depends on),
+metrics.csv (one row per update), checkpoints/step-N.safetensors and
+final.safetensors. Play the result with `naosoccer eval --blue ppo:DIR` or
+`naosoccer client --policy ppo:DIR`. See docs/LEARNING.md.")]
+pub struct TrainArgs {
+    /// Algorithm: dqn (the paper's Algorithm 1) or ppo (Algorithm 2).
+    #[arg(long)]
+    algo: Algo,
+    /// Robot transitions to train for (one learning robot, one control tick).
+    #[arg(long, default_value_t = 1_000_000)]
+    steps: u64,
+    /// Seed of the matches, the weights and the sampling.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Run directory to write (created; existing files are overwritten).
+    #[arg(long)]
+    out: PathBuf,
+    /// PPO hyperparameters: paper (Algorithm 2, PPO-PyTorch defaults) or
+    /// cleanrl (GAE, advantage normalisation, grad-norm clipping, orthogonal init).
+    #[arg(long, default_value = "paper")]
+    preset: Preset,
+    /// Opponent: scripted, random, idle, a frozen team (ppo:DIR, dqn:DIR) or
+    /// self-play[:N] (the learner's own snapshot, refreshed every N transitions).
+    #[arg(long, default_value = "scripted")]
+    opponent: String,
+    /// Matches played side by side.
+    #[arg(long, default_value_t = 16)]
+    matches: usize,
+    /// Threads stepping matches.
+    #[arg(long, default_value_t = 2)]
+    threads: usize,
+    /// libtorch's intra-op threads.
+    #[arg(long, default_value_t = 1)]
+    torch_threads: i32,
+    /// Match configuration (TOML); default: the built-in assets/match.toml.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Episode (match) length in minutes, overriding the configuration.
+    #[arg(long)]
+    minutes: Option<f32>,
+    /// Players the network controls, e.g. 0,1,2,3 (default) or 1.
+    #[arg(long, default_value = "0,1,2,3")]
+    learners: String,
+    /// Built-in policy of own players that do not learn.
+    #[arg(long, default_value = "idle")]
+    teammates: String,
+    /// Transitions between checkpoints.
+    #[arg(long, default_value_t = 250_000)]
+    checkpoint_every: u64,
+    /// PPO: control ticks each match plays between updates.
+    #[arg(long)]
+    rollout: Option<usize>,
+    /// PPO: passes over each rollout.
+    #[arg(long)]
+    epochs: Option<usize>,
+    /// DQN: one network shared by the team instead of one per robot (the paper).
+    #[arg(long)]
+    shared: bool,
+    /// DQN: exploration rate (the paper: 0.3, fixed).
+    #[arg(long)]
+    epsilon: Option<f64>,
+}
+
+pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
+    tch::set_num_threads(a.torch_threads.max(1));
+    let mcfg = match_config(a.config.as_ref(), a.minutes)?;
+    let mut cfg = TrainConfig::new(a.algo, mcfg);
+    cfg.steps = a.steps;
+    cfg.seed = a.seed;
+    cfg.matches = a.matches;
+    cfg.threads = a.threads;
+    cfg.learners = parse_players(&a.learners).map_err(anyhow::Error::msg)?;
+    cfg.teammates = a.teammates;
+    cfg.opponent = a
+        .opponent
+        .parse::<OpponentSpec>()
+        .map_err(anyhow::Error::msg)?;
+    cfg.checkpoint_every = a.checkpoint_every;
+    cfg.ppo = PpoConfig::preset(a.preset);
+    if let Some(r) = a.rollout {
+        cfg.ppo.rollout = r;
+    }
+    if let Some(e) = a.epochs {
+        cfg.ppo.epochs = e;
+    }
+    cfg.dqn.shared = a.shared;
+    if let Some(e) = a.epsilon {
+        cfg.dqn.epsilon = e;
+    }
+    let start = Instant::now();
+    let tty = std::io::stderr().is_terminal();
+    let mut last_print = 0.0f64;
+    let summary = train(&cfg, &a.out, &mut |p| {
+        let secs = start.elapsed().as_secs_f64();
+        // On a terminal, one line redrawn; in a log, a line every few seconds.
+        if !tty && secs - last_print < 5.0 && p.row.transitions < p.total_steps {
+            return;
+        }
+        last_print = secs;
+        let frac = p.row.transitions as f64 / p.total_steps as f64;
+        let filled = (frac * 24.0).round() as usize;
+        let line = format!(
+            "[{}{}] {:>5.1}% {} transitions, {:.0}/s, reward/tick {:.4}, episode return {:.2}, goals {:.2}:{:.2} ({} episodes)",
+            "#".repeat(filled.min(24)),
+            " ".repeat(24 - filled.min(24)),
+            100.0 * frac.min(1.0),
+            p.row.transitions,
+            p.row.transitions as f64 / secs.max(1e-9),
+            p.row.reward,
+            p.row.episode_return,
+            p.row.goals_for,
+            p.row.goals_against,
+            p.row.episodes,
+        );
+        let mut err = std::io::stderr();
+        if tty {
+            let _ = write!(err, "\r{line}\x1b[K");
+        } else {
+            let _ = writeln!(err, "{line}");
+        }
+    })?;
+    if tty {
+        eprintln!();
+    }
+    let secs = start.elapsed().as_secs_f64();
+    println!(
+        "trained {} for {} transitions in {:.1} s ({:.0} transitions/s); weights: {}",
+        cfg.algo,
+        summary.transitions,
+        secs,
+        summary.transitions as f64 / secs,
+        summary.final_weights.display()
+    );
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Examples:
+  naosoccer eval --blue ppo:runs/ppo-1 --red scripted --matches 50 --seed 1
+  naosoccer eval --blue ppo:assets/policies/ppo-seed1 --red dqn:assets/policies/dqn-seed1
+
+Each match i has a seed derived from --seed and i, so two evaluations with the
+same --seed play the same starts. Prints average goals, ball-control rate,
+passes, shots (mean ± 95% CI over matches) and wins/draws/losses per team.")]
+pub struct EvalArgs {
+    /// Blue team: scripted, random, idle, ppo:DIR or dqn:DIR.
+    #[arg(long)]
+    blue: String,
+    /// Red team: as --blue.
+    #[arg(long, default_value = "scripted")]
+    red: String,
+    /// Matches to play.
+    #[arg(long, default_value_t = 50)]
+    matches: usize,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Match configuration (TOML); default: the built-in assets/match.toml.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Match length in minutes, overriding the configuration.
+    #[arg(long)]
+    minutes: Option<f32>,
+    /// Threads stepping matches.
+    #[arg(long, default_value_t = 2)]
+    threads: usize,
+    /// One JSON object instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn eval_cmd(a: EvalArgs) -> anyhow::Result<()> {
+    tch::set_num_threads(1);
+    anyhow::ensure!(a.matches > 0, "--matches must be at least 1");
+    let cfg = match_config(a.config.as_ref(), a.minutes)?;
+    let mut blue = Side::parse(&a.blue)?;
+    let mut red = Side::parse(&a.red)?;
+    let start = Instant::now();
+    let results = play_matches(&cfg, &mut blue, &mut red, a.matches, a.seed, a.threads)?;
+    let secs = start.elapsed().as_secs_f64();
+    let rows = summarise(&results, &a.blue, &a.red);
+    if a.json {
+        let team = |r: &naosoccer_learn::eval::TeamSummary| {
+            let est = |e: &naosoccer_learn::eval::Estimate| serde_json::json!({"mean": e.mean, "ci95": e.ci95});
+            serde_json::json!({
+                "name": r.name, "goals": est(&r.goals), "control_rate_percent": est(&r.control_rate),
+                "passes": est(&r.passes), "shots": est(&r.shots),
+                "wins": r.wins, "draws": r.draws, "losses": r.losses,
+            })
+        };
+        let scores: Vec<_> = results.iter().map(|r| [r.score.0, r.score.1]).collect();
+        println!(
+            "{}",
+            serde_json::json!({
+                "matches": a.matches, "seed": a.seed, "minutes": cfg.minutes,
+                "blue": team(&rows[0]), "red": team(&rows[1]), "scores": scores,
+                "wall_seconds": secs,
+            })
+        );
+    } else {
+        print!("{}", format_table(&rows, a.matches));
+        println!("({:.1} min matches, {:.1} s)", cfg.minutes, secs);
+    }
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+#[command(after_help = "Example:
+  naosoccer plot runs/ppo-1 runs/dqn-1 --out docs/learning/curves.png
+
+Left: the team's long-term average reward (running mean since the start of
+training) against timeslots (control ticks per match); right: the same per
+robot. One colour per run.")]
+pub struct PlotArgs {
+    /// Run directories (or their metrics.csv files).
+    #[arg(required = true)]
+    runs: Vec<PathBuf>,
+    /// Output PNG.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+pub fn plot_cmd(a: PlotArgs) -> anyhow::Result<()> {
+    naosoccer_learn::plot::plot_runs(&a.runs, &a.out)?;
+    println!("wrote {}", a.out.display());
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+pub struct BenchLearnArgs {
+    /// Robot transitions to train for in the measurement.
+    #[arg(long, default_value_t = 200_000)]
+    steps: u64,
+    /// Matches side by side.
+    #[arg(long, default_value_t = 16)]
+    matches: usize,
+    /// Threads stepping matches.
+    #[arg(long, default_value_t = 2)]
+    threads: usize,
+    /// libtorch's intra-op threads.
+    #[arg(long, default_value_t = 1)]
+    torch_threads: i32,
+    /// PPO preset to measure: cleanrl (4 passes over each batch) or paper
+    /// (80 passes, about 20 times the update cost per transition).
+    #[arg(long, default_value = "cleanrl")]
+    preset: Preset,
+}
+
+/// PPO end to end (matches vs the scripted team, inference, updates), then
+/// the environment alone with random actions, in robot transitions a second.
+pub fn bench_learn(a: BenchLearnArgs) -> anyhow::Result<()> {
+    use naosoccer_client::PolicyKind;
+    use naosoccer_learn::env::{EnvConfig, Opponent, VecEnv};
+    use rand::{Rng, SeedableRng};
+
+    tch::set_num_threads(a.torch_threads.max(1));
+    let out = std::env::temp_dir().join(format!("naosoccer-bench-learn-{}", std::process::id()));
+    let mut cfg = TrainConfig::new(Algo::Ppo, MatchConfig::default());
+    cfg.steps = a.steps;
+    cfg.matches = a.matches;
+    cfg.threads = a.threads;
+    cfg.checkpoint_every = 0;
+    cfg.ppo = PpoConfig::preset(a.preset);
+    let start = Instant::now();
+    let summary = train(&cfg, &out, &mut |_| {})?;
+    let secs = start.elapsed().as_secs_f64();
+    let _ = std::fs::remove_dir_all(&out);
+    let e2e = summary.transitions as f64 / secs;
+
+    let mut env = VecEnv::new(
+        &cfg.match_config,
+        EnvConfig {
+            matches: a.matches,
+            learners: vec![0, 1, 2, 3],
+            teammates: PolicyKind::Idle,
+            threads: a.threads,
+            seed: 1,
+        },
+        Opponent::Builtin(PolicyKind::Scripted),
+    )?;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let mut actions = vec![0usize; env.rows()];
+    let ticks = (a.steps as usize / env.rows()).max(1);
+    let start = Instant::now();
+    for _ in 0..ticks {
+        actions.iter_mut().for_each(|x| *x = rng.random_range(0..5));
+        env.step(&actions)?;
+    }
+    let env_rate = (ticks * env.rows()) as f64 / start.elapsed().as_secs_f64();
+    println!("bench learn: PPO ({:?} preset), {} matches side by side, {} threads, 4 learning robots each vs scripted", a.preset, a.matches, a.threads);
+    println!(
+        "  end to end:        {:>10.0} robot transitions/s ({} transitions in {:.1} s)",
+        e2e, summary.transitions, secs
+    );
+    println!(
+        "  environment only:  {:>10.0} robot transitions/s (random actions)",
+        env_rate
+    );
+    println!(
+        "  target:            {:>10} robot transitions/s end to end: {}",
+        10_000,
+        if e2e >= 10_000.0 { "met" } else { "NOT met" }
+    );
+    Ok(())
+}

@@ -1,0 +1,130 @@
+//! The learning subcommands end to end through the real binary: a short
+//! training run, an evaluation of what it wrote, a plot of its metrics, and
+//! clear errors on bad input.
+#![cfg(feature = "learn")]
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn naosoccer(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_naosoccer"))
+        .args(args)
+        .output()
+        .expect("run naosoccer")
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn train_eval_plot_round_trip() {
+    let run = dir("cli_ppo_run");
+    let run_s = run.to_str().unwrap();
+    let out = naosoccer(&[
+        "train",
+        "--algo",
+        "ppo",
+        "--steps",
+        "2048",
+        "--seed",
+        "3",
+        "--matches",
+        "4",
+        "--rollout",
+        "32",
+        "--epochs",
+        "2",
+        "--minutes",
+        "0.1",
+        "--checkpoint-every",
+        "1024",
+        "--out",
+        run_s,
+    ]);
+    assert!(
+        out.status.success(),
+        "train failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in [
+        "config.json",
+        "metrics.csv",
+        "final.safetensors",
+        "checkpoints/step-1024.safetensors",
+    ] {
+        assert!(run.join(f).exists(), "{f} written");
+    }
+    let metrics = std::fs::read_to_string(run.join("metrics.csv")).unwrap();
+    assert!(
+        metrics.starts_with("update,timeslot,transitions"),
+        "{metrics}"
+    );
+    assert_eq!(
+        metrics.lines().count(),
+        1 + 2048 / (4 * 4 * 32),
+        "{metrics}"
+    );
+
+    let spec = format!("ppo:{run_s}");
+    let out = naosoccer(&[
+        "eval",
+        "--blue",
+        &spec,
+        "--red",
+        "scripted",
+        "--matches",
+        "3",
+        "--minutes",
+        "0.2",
+        "--seed",
+        "1",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "eval failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_slice(&out.stdout).expect("eval --json prints one JSON object");
+    assert_eq!(v["matches"], 3);
+    assert_eq!(v["scores"].as_array().unwrap().len(), 3);
+    let blue = v["blue"]["control_rate_percent"]["mean"].as_f64().unwrap();
+    let red = v["red"]["control_rate_percent"]["mean"].as_f64().unwrap();
+    assert!((0.0..=100.0).contains(&blue) && (0.0..=100.0).contains(&red));
+
+    let png = run.join("curves.png");
+    let out = naosoccer(&["plot", run_s, "--out", png.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "plot failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "a PNG file");
+}
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    let out = naosoccer(&["train", "--algo", "sarsa", "--out", "x"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("expected dqn or ppo"));
+
+    let out = naosoccer(&[
+        "eval",
+        "--blue",
+        "ppo:/nonexistent-run-dir",
+        "--matches",
+        "1",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("nonexistent-run-dir"), "{err}");
+
+    let out = naosoccer(&["eval", "--blue", "wizard", "--matches", "1"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown policy"));
+}
