@@ -221,7 +221,10 @@ pub fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
             .map(|s| (s.robots[r].x as f64, s.robots[r].y as f64))
             .collect();
         chart.draw_series(split_at_jumps(&path).map(|seg| {
-            PathElement::new(seg.to_vec(), ShapeStyle::from(&color.mix(0.55)).stroke_width(2))
+            PathElement::new(
+                seg.to_vec(),
+                ShapeStyle::from(&color.mix(0.55)).stroke_width(2),
+            )
         }))?;
         if let Some(&(x, y)) = path.last() {
             chart.draw_series(std::iter::once(Circle::new((x, y), 9, color.filled())))?;

@@ -225,7 +225,7 @@ impl<W: Write + Seek> Recorder<W> {
             self.write_json(Ch::Events, e.tick() * self.tick_ns, e)?;
         }
         self.write_state(m)?;
-        if self.opts.flush_every_ticks > 0 && m.tick() % self.opts.flush_every_ticks == 0 {
+        if self.opts.flush_every_ticks > 0 && m.tick().is_multiple_of(self.opts.flush_every_ticks) {
             self.writer.flush()?;
         }
         Ok(())
