@@ -219,7 +219,7 @@ async fn idle_connection_is_closed_after_the_idle_timeout() {
 #[tokio::test(start_paused = true)]
 async fn client_that_stops_reading_is_dropped_and_others_play_on() {
     let mut cfg = config(100_000);
-    cfg.start_players = 4;
+    cfg.start_players = 5;
     cfg.deadline_ms = 1;
     cfg.limits.max_outbound = 8;
     cfg.limits.messages_per_second = 1_000_000_000;
@@ -236,6 +236,13 @@ async fn client_that_stops_reading_is_dropped_and_others_play_on() {
     slow.join(Some(MatchId(1)), Team::Blue, BLUE, &all_players())
         .await
         .unwrap();
+    // A well-behaved robot client in the same match.
+    let mut keeper = Client::connect(server.addr(), "keeper").await.unwrap();
+    keeper
+        .join(Some(MatchId(1)), Team::Red, RED, &[p(0)])
+        .await
+        .unwrap();
+    let keeper = tokio::spawn(async move { play_out(&mut keeper, &[p(0)]).await });
 
     let mut admin = Client::connect(server.addr(), "admin").await.unwrap();
     let other = admin
@@ -312,6 +319,10 @@ async fn client_that_stops_reading_is_dropped_and_others_play_on() {
         "{observations} observations, dropped at tick {dropped_at}"
     );
     server.stop().await;
+    let (end, errors) = keeper.await.unwrap();
+    assert!(errors.is_empty(), "{errors:?}");
+    assert!(end.tick > dropped_at);
+    assert_eq!(end.misses.red[0], 0, "the keeper was never kept waiting");
 }
 
 async fn match_info(c: &mut Client, id: MatchId) -> MatchInfo {
@@ -552,6 +563,9 @@ async fn a_panicking_match_ends_alone() {
     let mut cfg = config(60);
     cfg.matches = 0;
     cfg.limits.fault_injection = true;
+    let dir = std::env::temp_dir().join(format!("naosoccer-panic-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    cfg.record_dir = Some(dir.clone());
     let (addr, stop, task) = start_with(cfg, hooks).await;
     let mut admin = Client::connect(addr, "admin").await.unwrap();
     let mk = |panic_at_tick| CreateMatch {
@@ -606,6 +620,28 @@ async fn a_panicking_match_ends_alone() {
             (again, expect(0, EndReason::Shutdown)),
         ]
     );
+    // Both recordings are finished files: the panicked match's up to its
+    // last played tick.
+    for (id, ticks) in [(doomed, 20), (healthy, 60)] {
+        let path = dir.join(format!("match-{}-seed-42.mcap", id.0));
+        let path = if path.exists() {
+            path
+        } else {
+            std::fs::read_dir(&dir)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .find(|p| {
+                    p.file_name()
+                        .and_then(|n| n.to_str())
+                        .is_some_and(|n| n.starts_with(&format!("match-{}-", id.0)))
+                })
+                .expect("a recording per match")
+        };
+        let rec = naosoccer_record::Recording::read_file(&path).unwrap();
+        assert!(rec.is_complete(), "{}: {:?}", path.display(), rec.truncated);
+        assert_eq!(rec.actions.len(), ticks, "{}", path.display());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[tokio::test]

@@ -29,6 +29,13 @@ pub enum BenchCommand {
     /// and prints both rates. Build with `--release` for meaningful figures.
     #[cfg(feature = "learn")]
     Learn(super::learn::BenchLearnArgs),
+    /// Many lockstep matches at once for a while, with well-behaved,
+    /// reconnecting and misbehaving clients mixed in.
+    ///
+    /// Prints matches completed, ticks, errors by code, whether the server
+    /// survived, peak RSS and RSS over time (is memory flat?). Build with
+    /// `--release` for meaningful figures.
+    Soak(super::soak::SoakArgs),
 }
 
 pub fn run(b: BenchCommand) -> anyhow::Result<()> {
@@ -37,5 +44,6 @@ pub fn run(b: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Server(args) => super::server::bench(args),
         #[cfg(feature = "learn")]
         BenchCommand::Learn(args) => super::learn::bench_learn(args),
+        BenchCommand::Soak(args) => super::soak::soak(args),
     }
 }

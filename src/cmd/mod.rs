@@ -6,3 +6,4 @@ pub mod learn;
 pub mod play;
 pub mod record;
 pub mod server;
+pub mod soak;

@@ -68,6 +68,39 @@ pub struct ServerArgs {
     /// Do not record matches.
     #[arg(long)]
     pub no_record: bool,
+    /// Per-connection limits (boxed: they would make every command large).
+    #[command(flatten)]
+    pub limits: Box<LimitArgs>,
+}
+
+/// `naosoccer server` limit options; absent ones keep the config file's value.
+#[derive(Args, Debug)]
+#[command(next_help_heading = "Limits (docs/PROTOCOL.md section 9)")]
+pub struct LimitArgs {
+    /// Connections served at once; more get `resource_exhausted` [default: 256].
+    #[arg(long)]
+    pub max_connections: Option<usize>,
+    /// Connections at once from one IP address [default: 64].
+    #[arg(long)]
+    pub max_connections_per_addr: Option<usize>,
+    /// Unfinished matches at once [default: 64].
+    #[arg(long)]
+    pub max_matches: Option<usize>,
+    /// Joins over one connection's life [default: 256].
+    #[arg(long)]
+    pub max_joins_per_connection: Option<u32>,
+    /// Sustained messages a second per connection; more are refused [default: 20000].
+    #[arg(long)]
+    pub messages_per_second: Option<u32>,
+    /// Messages a connection may send at once above that rate [default: 20000].
+    #[arg(long)]
+    pub message_burst: Option<u32>,
+    /// A connection without `hello` this long is closed [default: 10000].
+    #[arg(long)]
+    pub hello_timeout_ms: Option<u64>,
+    /// A connection silent this long is closed (lobby clients ping) [default: 600000].
+    #[arg(long)]
+    pub idle_timeout_ms: Option<u64>,
 }
 
 fn config_from(args: &ServerArgs) -> anyhow::Result<ServerConfig> {
@@ -105,6 +138,24 @@ fn config_from(args: &ServerArgs) -> anyhow::Result<ServerConfig> {
     if let Some(t) = &args.admin_token {
         cfg.tokens.admin = Some(t.clone());
     }
+    let limits = &args.limits;
+    if let Some(v) = limits.max_connections {
+        cfg.max_connections = v;
+    }
+    if let Some(v) = limits.max_matches {
+        cfg.max_matches = v;
+    }
+    macro_rules! limit {
+        ($($field:ident),*) => { $( if let Some(v) = limits.$field { cfg.limits.$field = v; } )* };
+    }
+    limit!(
+        max_connections_per_addr,
+        max_joins_per_connection,
+        messages_per_second,
+        message_burst,
+        hello_timeout_ms,
+        idle_timeout_ms
+    );
     if args.no_record {
         cfg.record_dir = None;
     } else if let Some(dir) = &args.record_dir {
@@ -337,6 +388,10 @@ pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
     rt.block_on(async move {
         let mut base = ServerConfig { mode: Mode::Lockstep, ..ServerConfig::default() };
         base.match_cfg.minutes = args.minutes;
+        // Every bench client connects from 127.0.0.1: lift the per-address
+        // and total connection limits that protect a real server.
+        base.max_connections = 4096;
+        base.limits.max_connections_per_addr = 4096;
 
         let run = |part: &str| args.parts.iter().any(|p| p == part);
         if run("single") {

@@ -11,9 +11,10 @@ use naosoccer_record::{
 use naosoccer_referee::{blank_observation, Match, MatchConfig};
 
 fn short_config(seconds: f32) -> MatchConfig {
-    let mut cfg = MatchConfig::default();
-    cfg.minutes = seconds / 60.0;
-    cfg
+    MatchConfig {
+        minutes: seconds / 60.0,
+        ..MatchConfig::default()
+    }
 }
 
 fn meta(cfg: &MatchConfig, seed: u64, m: &Match) -> MatchMeta {

@@ -75,8 +75,8 @@ pub struct Limits {
     /// A frame whose first bytes arrived must be complete within this
     /// (checked every `frame_timeout_ms`, so a stalled frame goes within twice it).
     pub frame_timeout_ms: u64,
-    /// A connection that sends no complete frame for this long is closed
-    /// (clients waiting in a lobby send `ping`).
+    /// A connection outside a match that sends no complete frame for this
+    /// long is closed (clients waiting in the lobby send `ping`).
     pub idle_timeout_ms: u64,
     /// A write to a peer that does not read for this long closes the connection.
     pub write_timeout_ms: u64,

@@ -187,7 +187,10 @@ impl Conn {
                     let m = format!("no hello within {} ms (hello_timeout_ms)", limits.hello_timeout_ms);
                     return self.fatal(ErrorCode::DeadlineExceeded, m).await;
                 }
-                _ = &mut idle => {
+                // Only in the lobby: a seated client may wait long for its
+                // match to start, and a dead seated peer is found by the
+                // write deadline and keepalive instead.
+                _ = &mut idle, if self.seat.is_none() => {
                     let m = format!("no message for {} ms (idle_timeout_ms); send ping to stay connected", limits.idle_timeout_ms);
                     return self.fatal(ErrorCode::DeadlineExceeded, m).await;
                 }
@@ -203,6 +206,7 @@ impl Conn {
                     }
                 }
                 event = recv_seat(&mut self.seat) => {
+                    idle.as_mut().reset(Instant::now() + idle_timeout);
                     match event {
                         SeatEvent::Kicked(e) => {
                             self.seat = None;
@@ -556,6 +560,9 @@ impl Conn {
     }
 }
 
+// Observations are inline in `Outgoing` so a tick allocates nothing; this
+// enum only carries one across a select.
+#[allow(clippy::large_enum_variant)]
 enum SeatEvent {
     Out(Option<Outgoing>),
     Kicked(ErrorMsg),
@@ -571,18 +578,55 @@ async fn recv_seat(seat: &mut Option<Seat>) -> SeatEvent {
         tokio::select! {
             biased;
             out = s.out.recv() => return SeatEvent::Out(out),
-            k = &mut s.kicked, if !s.kick_gone => match k {
-                Ok(e) => return SeatEvent::Kicked(e),
-                Err(_) => {}
-            },
+            k = &mut s.kicked, if !s.kick_gone => {
+                if let Ok(e) = k {
+                    return SeatEvent::Kicked(e);
+                }
+            }
         }
         // Only a dropped kick sender gets here.
         s.kick_gone = true;
     }
 }
 
-/// Token comparison whose time does not depend on where the first difference is.
+/// Token comparison whose time does not depend on the tokens' contents
+/// (`subtle`'s constant-time equality; only a length difference shows).
 fn token_eq(given: &str, expected: &str) -> bool {
-    let (a, b) = (given.as_bytes(), expected.as_bytes());
-    a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+    use subtle::ConstantTimeEq;
+    given.as_bytes().ct_eq(expected.as_bytes()).into()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn token_eq_compares_whole_tokens() {
+        assert!(token_eq("blue-secret", "blue-secret"));
+        assert!(!token_eq("blue-secreT", "blue-secret"));
+        assert!(!token_eq("blue-secret", "blue-secret-2"));
+        assert!(!token_eq("", "blue-secret"));
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn bucket_refuses_over_the_rate_and_refills() {
+        let mut b = Bucket::new(10, 3);
+        for _ in 0..3 {
+            assert!(matches!(b.admit(), Admit::Yes));
+        }
+        assert!(matches!(b.admit(), Admit::Refuse));
+        // 0.2 s at 10/s: two tokens back, one of them owed for the refusal.
+        tokio::time::advance(Duration::from_millis(200)).await;
+        assert!(matches!(b.admit(), Admit::Yes));
+        assert!(matches!(b.admit(), Admit::Refuse));
+        assert!(matches!(b.admit(), Admit::Refuse));
+        assert!(matches!(b.admit(), Admit::Refuse));
+        assert!(matches!(b.admit(), Admit::Disconnect));
+        // Refills never exceed the burst.
+        tokio::time::advance(Duration::from_secs(3600)).await;
+        for _ in 0..3 {
+            assert!(matches!(b.admit(), Admit::Yes));
+        }
+        assert!(matches!(b.admit(), Admit::Refuse));
+    }
 }

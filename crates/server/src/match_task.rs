@@ -225,7 +225,12 @@ impl MatchTask {
             "match ended: blue {blue} - {red} red"
         );
         if let Some(o) = &mut self.observer {
-            o.on_end(&end, &self.game);
+            // An observer that panicked mid-tick may panic again here; the
+            // clients still get their match_end.
+            let finish = std::panic::AssertUnwindSafe(|| o.on_end(&end, &self.game));
+            if std::panic::catch_unwind(finish).is_err() {
+                tracing::error!(match_id = %id, "the match observer panicked in on_end");
+            }
         }
         // Finished before anyone hears of it, so a client that lists matches
         // right after its match_end sees it finished.
