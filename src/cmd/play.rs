@@ -140,19 +140,7 @@ struct RecordingReport {
 impl MatchRecording {
     fn start(path: &std::path::Path, cfg: &MatchConfig, args: &MatchArgs) -> anyhow::Result<Self> {
         let m = Match::new(cfg, args.seed)?;
-        let meta = MatchMeta {
-            format: naosoccer_record::RECORDING_FORMAT,
-            naosoccer_version: env!("CARGO_PKG_VERSION").into(),
-            seed: args.seed,
-            config: cfg.clone(),
-            blue: args.blue.to_string(),
-            red: args.red.to_string(),
-            source: "match".into(),
-            match_id: None,
-            mode: None,
-            control_hz: cfg.control_hz,
-            total_ticks: m.total_ticks(),
-        };
+        let meta = MatchMeta::of(&m, &args.blue.to_string(), &args.red.to_string(), "match");
         let rec = Recorder::create(path, &meta, &m, RecorderOptions::default())
             .with_context(|| format!("creating {}", path.display()))?;
         Ok(MatchRecording {
@@ -292,19 +280,7 @@ pub fn bench_sim(args: BenchSimArgs) -> anyhow::Result<()> {
     // The same match again, recorded to MCAP in memory (what `--record`
     // and the server add).
     let m = Match::new(&cfg, args.seed)?;
-    let meta = MatchMeta {
-        format: naosoccer_record::RECORDING_FORMAT,
-        naosoccer_version: env!("CARGO_PKG_VERSION").into(),
-        seed: args.seed,
-        config: cfg.clone(),
-        blue: scripted.to_string(),
-        red: scripted.to_string(),
-        source: "match".into(),
-        match_id: None,
-        mode: None,
-        control_hz: cfg.control_hz,
-        total_ticks: m.total_ticks(),
-    };
+    let meta = MatchMeta::of(&m, &scripted.to_string(), &scripted.to_string(), "match");
     let start = Instant::now();
     let mut rec = Some(Recorder::new(
         std::io::Cursor::new(Vec::with_capacity(8 << 20)),

@@ -30,6 +30,26 @@ pub struct MatchMeta {
     pub total_ticks: u64,
 }
 
+impl MatchMeta {
+    /// The metadata of `m`, about to be played by `blue` and `red`, recorded
+    /// by this build of naosoccer; `source` is `match` or `server`.
+    pub fn of(m: &Match, blue: &str, red: &str, source: &str) -> MatchMeta {
+        MatchMeta {
+            format: RECORDING_FORMAT,
+            naosoccer_version: env!("CARGO_PKG_VERSION").into(),
+            seed: m.seed(),
+            config: m.config().clone(),
+            blue: blue.into(),
+            red: red.into(),
+            source: source.into(),
+            match_id: None,
+            mode: None,
+            control_hz: m.config().control_hz,
+            total_ticks: m.total_ticks(),
+        }
+    }
+}
+
 /// `/match/actions`, every control tick: the actions applied to go from tick
 /// `tick` to `tick + 1` (robots 0..=3 blue, 4..=7 red).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -8,7 +8,7 @@ use std::fs::File;
 use std::path::{Path, PathBuf};
 
 use naosoccer_proto::msg::{EndReason, Fill, MatchEnd, MatchInfo, Mode};
-use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RECORDING_FORMAT};
+use naosoccer_record::{MatchMeta, Recorder, RecorderOptions};
 use naosoccer_referee::Match;
 
 use crate::observer::{MatchObserver, TickRecord};
@@ -52,25 +52,15 @@ fn fill_name(fill: Fill) -> &'static str {
 impl MatchObserver for McapObserver {
     fn on_start(&mut self, info: &MatchInfo, game: &Match) {
         let players = format!("clients, empty slots {}", fill_name(info.fill));
-        let meta = MatchMeta {
-            format: RECORDING_FORMAT,
-            naosoccer_version: env!("CARGO_PKG_VERSION").into(),
-            seed: info.seed,
-            config: game.config().clone(),
-            blue: players.clone(),
-            red: players,
-            source: "server".into(),
-            match_id: Some(info.match_id.0),
-            mode: Some(
-                match info.mode {
-                    Mode::Lockstep => "lockstep",
-                    Mode::Realtime => "realtime",
-                }
-                .into(),
-            ),
-            control_hz: info.control_hz,
-            total_ticks: info.total_ticks,
-        };
+        let mut meta = MatchMeta::of(game, &players, &players, "server");
+        meta.match_id = Some(info.match_id.0);
+        meta.mode = Some(
+            match info.mode {
+                Mode::Lockstep => "lockstep",
+                Mode::Realtime => "realtime",
+            }
+            .into(),
+        );
         if let Err(e) = std::fs::create_dir_all(&self.dir) {
             return self.fail("start", e);
         }
