@@ -31,7 +31,7 @@ async fn server_match_is_recorded_and_replays_identically() {
             token: if team == Team::Blue { BLUE } else { RED }.to_owned(),
             match_id: Some(MatchId(1)),
             players: Player::all().collect(),
-            policy,
+            policy: policy.into(),
             team_connection: true,
         };
         tasks.push(tokio::spawn(async move { run_team(&run).await }));

@@ -21,7 +21,7 @@ fn team_run(addr: &str, team: Team, policy: PolicyKind, team_connection: bool) -
         token: if team == Team::Blue { BLUE } else { RED }.to_owned(),
         match_id: Some(MatchId(1)),
         players: all_players(),
-        policy,
+        policy: policy.into(),
         team_connection,
     }
 }

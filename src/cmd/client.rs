@@ -2,7 +2,7 @@
 use anyhow::Context;
 use clap::Args;
 use naosoccer_client::robot::{run_team, TeamRun};
-use naosoccer_client::PolicyKind;
+use naosoccer_client::{PolicyKind, TeamPolicy};
 use naosoccer_proto::msg::{MatchId, Player};
 use naosoccer_proto::Team;
 
@@ -12,7 +12,15 @@ By default every player is its own robot connection (like real robots); \
 --team-connection runs them all over one team connection instead (the paper's \
 central scheduling). Without --match the clients join the oldest unfinished \
 match whose slots are free. When the match ends the team's statistics are \
-printed and the command exits 0.")]
+printed and the command exits 0.
+
+--policy takes a built-in team (scripted, random, idle) or a trained one: \
+ppo:DIR or dqn:DIR (a `naosoccer train` run directory, e.g. \
+assets/policies/ppo-seed1) or ppo:DIR/checkpoints/step-N.safetensors. A PPO \
+team samples its actions (seeded by the match seed, so the match is \
+repeatable); ppo-greedy:DIR takes the most likely action instead; a DQN team \
+takes the largest Q-value. A trained team over --team-connection runs all its \
+players in one forward pass per tick.")]
 pub struct ClientArgs {
     /// Server address.
     #[arg(long, value_name = "HOST:PORT", default_value = "127.0.0.1:7878")]
@@ -28,9 +36,9 @@ pub struct ClientArgs {
     /// Players to run, comma-separated, 0..=3 (0 keeps goal).
     #[arg(long, value_delimiter = ',', default_value = "0,1,2,3")]
     pub players: Vec<u8>,
-    /// Built-in policy.
-    #[arg(long, value_name = "scripted|random|idle", default_value = "scripted")]
-    pub policy: PolicyKind,
+    /// The team's policy: scripted, random, idle, or a trained team ppo:DIR / dqn:DIR.
+    #[arg(long, value_name = "POLICY", default_value = "scripted")]
+    pub policy: String,
     /// One connection for all players instead of one per player.
     #[arg(long)]
     pub team_connection: bool,
@@ -49,7 +57,7 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
         token: args.token.clone(),
         match_id: args.match_id.map(MatchId),
         players,
-        policy: args.policy,
+        policy: team_policy(&args.policy)?,
         team_connection: args.team_connection,
     };
     let rt = tokio::runtime::Builder::new_multi_thread()
@@ -81,4 +89,38 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
         misses
     );
     Ok(())
+}
+
+/// A built-in policy name or a trained team's spec, loaded once here so that
+/// a bad path or a mismatched checkpoint fails before the client joins.
+fn team_policy(spec: &str) -> anyhow::Result<TeamPolicy> {
+    if !spec.contains(':') {
+        let kind: PolicyKind = spec
+            .parse()
+            .map_err(|e| anyhow::anyhow!("{e}, or a trained team such as ppo:DIR or dqn:DIR"))?;
+        return Ok(kind.into());
+    }
+    learned(spec)
+}
+
+#[cfg(feature = "learn")]
+fn learned(spec: &str) -> anyhow::Result<TeamPolicy> {
+    naosoccer_learn::load_policy(spec).with_context(|| format!("loading --policy {spec}"))?;
+    let owned = spec.to_owned();
+    Ok(TeamPolicy::Custom {
+        name: spec.to_owned(),
+        batched: true,
+        build: std::sync::Arc::new(move |seed, _robot| {
+            naosoccer_learn::load_policy_for_match(&owned, seed)
+                .map_err(|e| format!("loading {owned}: {e}"))
+        }),
+    })
+}
+
+#[cfg(not(feature = "learn"))]
+fn learned(spec: &str) -> anyhow::Result<TeamPolicy> {
+    anyhow::bail!(
+        "--policy {spec}: this naosoccer was built without learning support \
+         (--no-default-features); build it with the default features to play trained teams"
+    )
 }

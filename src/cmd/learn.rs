@@ -140,7 +140,16 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let tty = std::io::stderr().is_terminal();
     let mut last_print = 0.0f64;
+    // Matches end together, so most rows have no finished episode: show the
+    // latest episodes that did finish.
+    let mut last_episodes = "no episode finished yet".to_string();
     let summary = train(&cfg, &a.out, &mut |p| {
+        if !p.row.episode_return.is_nan() {
+            last_episodes = format!(
+                "last episodes: return {:.2}, goals {:.2}:{:.2} ({} so far)",
+                p.row.episode_return, p.row.goals_for, p.row.goals_against, p.row.episodes
+            );
+        }
         let secs = start.elapsed().as_secs_f64();
         // On a terminal, one line redrawn; in a log, a line every few seconds.
         if !tty && secs - last_print < 5.0 && p.row.transitions < p.total_steps {
@@ -150,17 +159,14 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         let frac = p.row.transitions as f64 / p.total_steps as f64;
         let filled = (frac * 24.0).round() as usize;
         let line = format!(
-            "[{}{}] {:>5.1}% {} transitions, {:.0}/s, reward/tick {:.4}, episode return {:.2}, goals {:.2}:{:.2} ({} episodes)",
+            "[{}{}] {:>5.1}% {} transitions, {:.0}/s, reward/tick {:.4}, {}",
             "#".repeat(filled.min(24)),
             " ".repeat(24 - filled.min(24)),
             100.0 * frac.min(1.0),
             p.row.transitions,
             p.row.transitions as f64 / secs.max(1e-9),
             p.row.reward,
-            p.row.episode_return,
-            p.row.goals_for,
-            p.row.goals_against,
-            p.row.episodes,
+            last_episodes,
         );
         let mut err = std::io::stderr();
         if tty {
@@ -190,10 +196,14 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
   naosoccer eval --blue ppo:assets/policies/ppo-seed1 --red dqn:assets/policies/dqn-seed1
 
 Each match i has a seed derived from --seed and i, so two evaluations with the
-same --seed play the same starts. Prints average goals, ball-control rate,
-passes, shots (mean ± 95% CI over matches) and wins/draws/losses per team.")]
+same --seed play the same matches. Prints average goals, ball-control rate,
+passes, shots (mean ± 95% CI over matches) and wins/draws/losses per team.
+
+A PPO team (ppo:DIR) samples its actions from its policy, drawing from a hash
+of the match seed, robot and tick; ppo-greedy:DIR takes the most likely action;
+dqn:DIR takes the largest Q-value.")]
 pub struct EvalArgs {
-    /// Blue team: scripted, random, idle, ppo:DIR or dqn:DIR.
+    /// Blue team: scripted, random, idle, ppo:DIR, ppo-greedy:DIR or dqn:DIR.
     #[arg(long)]
     blue: String,
     /// Red team: as --blue.

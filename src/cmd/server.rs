@@ -342,7 +342,7 @@ async fn bench_round(
                 token: tokens.team(team).to_owned(),
                 match_id: Some(MatchId(u64::from(id))),
                 players: Player::all().collect(),
-                policy: PolicyKind::Scripted,
+                policy: PolicyKind::Scripted.into(),
                 team_connection: false,
             };
             clients.push(tokio::spawn(async move { run_team(&run).await }));

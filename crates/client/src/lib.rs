@@ -14,3 +14,4 @@ pub mod robot;
 
 pub use net::{Client, ClientError, Push};
 pub use policy::{ParsePolicyError, Policy, PolicyKind};
+pub use robot::{PolicyFactory, TeamPolicy};

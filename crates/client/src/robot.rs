@@ -2,10 +2,61 @@
 //! robot connections (one per player, like real robots) or as one team
 //! connection (the paper's central joint scheduling).
 
+use std::fmt;
+use std::sync::Arc;
+
 use crate::net::{Client, ClientError};
 use crate::policy::{Policy, PolicyKind};
 use naosoccer_proto::msg::{MatchEnd, MatchId, Player};
 use naosoccer_proto::{RobotId, Team};
+
+/// Builds a policy for a robot from the match seed and the robot id.
+pub type PolicyFactory = Arc<dyn Fn(u64, RobotId) -> Result<Box<dyn Policy>, String> + Send + Sync>;
+
+/// The policy a team plays with: a built-in one, or any other (a trained
+/// network, your own) through a factory.
+#[derive(Clone)]
+pub enum TeamPolicy {
+    /// One instance per robot, seeded from the match seed and the robot id.
+    Builtin(PolicyKind),
+    /// A policy from `build`. With `batched`, a team connection builds one
+    /// instance (for its first player) and asks it for all players at once
+    /// through `Policy::act_batch`, so a network runs one forward pass per
+    /// tick; otherwise every robot gets its own instance.
+    Custom {
+        name: String,
+        batched: bool,
+        build: PolicyFactory,
+    },
+}
+
+impl TeamPolicy {
+    pub fn name(&self) -> &str {
+        match self {
+            TeamPolicy::Builtin(k) => k.name(),
+            TeamPolicy::Custom { name, .. } => name,
+        }
+    }
+}
+
+impl From<PolicyKind> for TeamPolicy {
+    fn from(k: PolicyKind) -> Self {
+        TeamPolicy::Builtin(k)
+    }
+}
+
+impl fmt::Debug for TeamPolicy {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TeamPolicy::Builtin(k) => f.debug_tuple("Builtin").field(k).finish(),
+            TeamPolicy::Custom { name, batched, .. } => f
+                .debug_struct("Custom")
+                .field("name", name)
+                .field("batched", batched)
+                .finish_non_exhaustive(),
+        }
+    }
+}
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -17,7 +68,7 @@ pub struct TeamRun {
     /// `None`: the oldest unfinished match with these slots free.
     pub match_id: Option<MatchId>,
     pub players: Vec<Player>,
-    pub policy: PolicyKind,
+    pub policy: TeamPolicy,
     /// One connection for all players instead of one per player.
     pub team_connection: bool,
 }
@@ -68,9 +119,10 @@ pub async fn run_team(run: &TeamRun) -> Result<Vec<ConnectionResult>, ClientErro
     }
 }
 
-/// One connection: connect, join `players`, play with one built-in policy
-/// instance per robot (seeded from the match seed, as the in-process runner
-/// does), return the match end.
+/// One connection: connect, join `players`, play with one policy instance
+/// per robot (built from the match seed, as the in-process runner builds
+/// them) or, for a batched custom policy, one for the connection; return the
+/// match end.
 pub async fn play_connection(
     run: &TeamRun,
     players: Vec<Player>,
@@ -85,14 +137,26 @@ pub async fn play_connection(
         .join(run.match_id, run.team, &run.token, &players)
         .await?;
     tracing::info!(match_id = %joined.match_id, team = %run.team, ?players, "joined");
-    let mut policies: Vec<Box<dyn Policy>> = joined
-        .players
-        .iter()
-        .map(|p| {
-            let robot = RobotId::new(run.team, p.index()).expect("player numbers are validated");
-            run.policy.build(joined.seed, robot)
-        })
-        .collect();
+    let robot =
+        |p: &Player| RobotId::new(run.team, p.index()).expect("player numbers are validated");
+    let mut policies: Vec<Box<dyn Policy>> = match &run.policy {
+        TeamPolicy::Builtin(kind) => joined
+            .players
+            .iter()
+            .map(|p| kind.build(joined.seed, robot(p)))
+            .collect(),
+        TeamPolicy::Custom { batched, build, .. } => {
+            let robots: Vec<RobotId> = if *batched {
+                joined.players.iter().take(1).map(robot).collect()
+            } else {
+                joined.players.iter().map(robot).collect()
+            };
+            robots
+                .into_iter()
+                .map(|r| build(joined.seed, r).map_err(ClientError::Policies))
+                .collect::<Result<_, _>>()?
+        }
+    };
     let end = client.play(&joined, &mut policies).await?;
     Ok(ConnectionResult { players, end })
 }

@@ -12,7 +12,7 @@ use naosoccer_referee::{Match, MatchConfig};
 
 use crate::env::episode_seed;
 use crate::obs::OBS_DIM;
-use crate::policy::LearnedPolicy;
+use crate::policy::{sample_uniform, LearnedPolicy};
 use crate::LearnError;
 
 /// One side of an evaluation.
@@ -92,6 +92,7 @@ pub fn play_matches(
     }
     let mut feats = Vec::new();
     let mut players = Vec::new();
+    let mut uniforms = Vec::new();
     let mut acts = Vec::new();
     while slots.iter().any(|s| !s.m.is_finished()) {
         for (team, side) in [(Team::Blue, &mut *blue), (Team::Red, &mut *red)] {
@@ -104,6 +105,7 @@ pub fn play_matches(
             let n = live.len() * PLAYERS_PER_TEAM;
             feats.resize(n * OBS_DIM, 0.0);
             players.clear();
+            uniforms.clear();
             acts.resize(n, 0usize);
             let scale = policy.scale();
             for (j, &i) in live.iter().enumerate() {
@@ -112,9 +114,11 @@ pub fn play_matches(
                     let obs = &slots[i].obs[team.index() * PLAYERS_PER_TEAM + p];
                     scale.encode(obs, &mut feats[row * OBS_DIM..(row + 1) * OBS_DIM]);
                     players.push(p);
+                    // Keyed as a policy playing this one match would key it.
+                    uniforms.push(sample_uniform(slots[i].m.seed(), team.index(), p, obs.tick));
                 }
             }
-            policy.act_rows_players(&feats, &players, &mut acts);
+            policy.act_rows_keyed(&feats, &players, &uniforms, &mut acts);
             for (j, &i) in live.iter().enumerate() {
                 for p in 0..PLAYERS_PER_TEAM {
                     let a =

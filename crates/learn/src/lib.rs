@@ -26,5 +26,5 @@ pub mod train;
 
 pub use error::LearnError;
 pub use obs::{ObsScale, OBS_DIM, OBS_VERSION};
-pub use policy::{load_policy, LearnedPolicy};
+pub use policy::{load_policy, load_policy_for_match, ActMode, LearnedPolicy};
 pub use train::{train, Algo, OpponentSpec, TrainConfig};

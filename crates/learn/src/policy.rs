@@ -1,7 +1,15 @@
 //! Trained networks as players: [`LearnedPolicy`] implements the client's
 //! `Policy` (so the robot client loop plays it over the socket) and the
 //! environment's `BatchActor` (so evaluation and self-play run every robot
-//! of every match in one forward pass). Actions are greedy.
+//! of every match in one forward pass).
+//!
+//! How a network picks an action ([`ActMode`]): a PPO team samples from its
+//! policy distribution (`ppo:DIR`, the trained policy as it was trained) or
+//! takes the most likely action (`ppo-greedy:DIR`); a DQN team takes the
+//! largest Q-value (`dqn:DIR`). Sampling draws one number per robot and tick
+//! from a counter-based hash of (match seed, team, player, tick), so a
+//! sampled match is the same in process, over robot connections or over a
+//! team connection, whatever the batching.
 //!
 //! A run directory holds `config.json` (the training configuration, which
 //! says how to rebuild the networks) and `final.safetensors` (or, while a run
@@ -21,6 +29,29 @@ use crate::ppo::{ActorCritic, ACTIONS};
 use crate::train::{Algo, TrainConfig};
 use crate::LearnError;
 
+/// How a trained network turns its outputs into an action.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ActMode {
+    /// The largest output (PPO: most likely action; DQN: largest Q-value).
+    Greedy,
+    /// PPO only: an action drawn from the softmax of the logits.
+    Sample,
+}
+
+/// The uniform number in [0, 1) a sampling robot uses at `tick`: a hash of
+/// the match seed, the robot's team and player and the tick, so it does not
+/// depend on how robots are batched or in which order they are asked.
+pub fn sample_uniform(match_seed: u64, team: usize, player: usize, tick: u64) -> f32 {
+    let mut z = match_seed ^ 0x6A09_E667_F3BC_C909;
+    for v in [team as u64, player as u64, tick] {
+        z = z.wrapping_add(v).wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+    }
+    (z >> 40) as f32 / (1u64 << 24) as f32
+}
+
 enum Model {
     Ppo(ActorCritic),
     /// One network per entry of `learners`, or one shared.
@@ -33,10 +64,17 @@ pub struct LearnedPolicy {
     scale: ObsScale,
     learners: Vec<usize>,
     model: Model,
+    mode: ActMode,
+    /// Seeds sampling (`ActMode::Sample`); the match seed when playing one match.
+    match_seed: u64,
+    /// Calls of the unkeyed batch path (training opponents), which key their
+    /// samples by this counter instead of a tick.
+    calls: u64,
     feats: Vec<f32>,
     rows: Vec<f32>,
     out: Vec<f32>,
     players: Vec<usize>,
+    keys: Vec<f32>,
 }
 
 impl std::fmt::Debug for LearnedPolicy {
@@ -47,10 +85,19 @@ impl std::fmt::Debug for LearnedPolicy {
     }
 }
 
-/// Loads `ppo:DIR`, `dqn:DIR` (a run directory) or `ppo:FILE.safetensors`
-/// (a checkpoint inside a run directory) as a boxed `Policy`.
+/// Loads `ppo:DIR`, `ppo-greedy:DIR`, `dqn:DIR` (a run directory) or
+/// `ppo:FILE.safetensors` (a checkpoint inside a run directory) as a boxed
+/// `Policy`, sampling (if it samples) as in a match of seed 0.
 pub fn load_policy(spec: &str) -> Result<Box<dyn Policy>, LearnError> {
-    Ok(Box::new(LearnedPolicy::load(spec)?))
+    load_policy_for_match(spec, 0)
+}
+
+/// As [`load_policy`], for a match of seed `match_seed`: the policy the
+/// server-side runner and `naosoccer client` build for each match.
+pub fn load_policy_for_match(spec: &str, match_seed: u64) -> Result<Box<dyn Policy>, LearnError> {
+    let mut p = LearnedPolicy::load(spec)?;
+    p.set_match_seed(match_seed);
+    Ok(Box::new(p))
 }
 
 /// Where a run directory keeps its configuration and weights.
@@ -104,10 +151,19 @@ impl LearnedPolicy {
             spec: spec.to_string(),
             reason: reason.to_string(),
         };
-        let (algo, path) = spec
+        let (kind, path) = spec
             .split_once(':')
-            .ok_or_else(|| bad("expected ppo:DIR or dqn:DIR"))?;
-        let algo: Algo = algo.parse().map_err(|e: String| bad(&e))?;
+            .ok_or_else(|| bad("expected ppo:DIR, ppo-greedy:DIR or dqn:DIR"))?;
+        let (algo, mode) = match kind {
+            "ppo" => (Algo::Ppo, ActMode::Sample),
+            "ppo-greedy" => (Algo::Ppo, ActMode::Greedy),
+            "dqn" => (Algo::Dqn, ActMode::Greedy),
+            other => {
+                return Err(bad(&format!(
+                    "unknown kind {other:?} (expected ppo, ppo-greedy or dqn)"
+                )))
+            }
+        };
         let (cfg_path, weights) = resolve_run(Path::new(path))?;
         let text = std::fs::read_to_string(&cfg_path).map_err(|e| LearnError::io(&cfg_path, e))?;
         let cfg: TrainConfig = serde_json::from_str(&text).map_err(|e| LearnError::Json {
@@ -124,7 +180,8 @@ impl LearnedPolicy {
                 expected: OBS_VERSION,
             });
         }
-        let mut p = LearnedPolicy::untrained(&cfg, format!("{algo}:{path}"));
+        let mut p = LearnedPolicy::untrained(&cfg, format!("{kind}:{path}"));
+        p.mode = mode;
         p.load_weights(&weights)?;
         Ok(p)
     }
@@ -151,11 +208,29 @@ impl LearnedPolicy {
             scale: cfg.obs_scale,
             learners: cfg.learners.clone(),
             model,
+            mode: ActMode::Greedy,
+            match_seed: 0,
+            calls: 0,
             feats: vec![0.0; OBS_DIM],
             rows: Vec::new(),
             out: Vec::new(),
             players: Vec::new(),
+            keys: Vec::new(),
         }
+    }
+
+    pub fn mode(&self) -> ActMode {
+        self.mode
+    }
+
+    /// Greedy or sampled actions (sampling needs a PPO network).
+    pub fn set_mode(&mut self, mode: ActMode) {
+        self.mode = mode;
+    }
+
+    /// The seed sampling draws from in `Policy::act`: the match's seed.
+    pub fn set_match_seed(&mut self, seed: u64) {
+        self.match_seed = seed;
     }
 
     fn stores(&self) -> Vec<&VarStore> {
@@ -190,18 +265,55 @@ impl LearnedPolicy {
         Ok(())
     }
 
-    /// Greedy actions for rows of observation vectors; `players[i]` is the
-    /// player number of row `i`.
+    /// Actions for rows of observation vectors; `players[i]` is the player
+    /// number of row `i`. A sampling policy keys its draws by an internal
+    /// call counter here (deterministic for a fixed sequence of calls); use
+    /// [`LearnedPolicy::act_rows_keyed`] to key them by match and tick.
     pub fn act_rows_players(&mut self, obs: &[f32], players: &[usize], out: &mut [usize]) {
+        let mut keys = std::mem::take(&mut self.keys);
+        keys.clear();
+        if self.mode == ActMode::Sample {
+            let call = self.calls;
+            keys.extend((0..out.len()).map(|i| sample_uniform(self.match_seed, i, 0, call)));
+        }
+        self.calls += 1;
+        self.act_rows_keyed(obs, players, &keys, out);
+        self.keys = keys;
+    }
+
+    /// Actions for rows of observation vectors; `players[i]` is the player
+    /// number of row `i` and `uniforms[i]` its draw from
+    /// [`sample_uniform`] (unused, and may be empty, when greedy).
+    pub fn act_rows_keyed(
+        &mut self,
+        obs: &[f32],
+        players: &[usize],
+        uniforms: &[f32],
+        out: &mut [usize],
+    ) {
         let n = out.len();
         match &self.model {
             Model::Ppo(ac) => {
                 let x = Tensor::from_slice(&obs[..n * OBS_DIM]).view([n as i64, OBS_DIM as i64]);
-                let logits = tch::no_grad(|| ac.logits(&x)).to_kind(Kind::Float);
+                let sample = self.mode == ActMode::Sample;
+                let y = tch::no_grad(|| {
+                    let logits = ac.logits(&x);
+                    if sample {
+                        logits.softmax(-1, Kind::Float)
+                    } else {
+                        logits
+                    }
+                })
+                .to_kind(Kind::Float);
                 self.out.resize(n * ACTIONS, 0.0);
-                logits.copy_data(&mut self.out, n * ACTIONS);
+                y.copy_data(&mut self.out, n * ACTIONS);
                 for (i, o) in out.iter_mut().enumerate() {
-                    *o = argmax(&self.out[i * ACTIONS..(i + 1) * ACTIONS]);
+                    let row = &self.out[i * ACTIONS..(i + 1) * ACTIONS];
+                    *o = if sample {
+                        crate::ppo::sample(row, uniforms[i])
+                    } else {
+                        argmax(row)
+                    };
                 }
             }
             Model::Dqn(nets) => {
@@ -279,12 +391,31 @@ impl LearnedPolicy {
     }
 }
 
+impl LearnedPolicy {
+    /// The draw robot `obs` uses this tick.
+    fn uniform_for(&self, obs: &Observation) -> f32 {
+        sample_uniform(
+            self.match_seed,
+            obs.team.index(),
+            obs.player as usize % PLAYERS_PER_TEAM,
+            obs.tick,
+        )
+    }
+}
+
 impl Policy for LearnedPolicy {
     fn act(&mut self, obs: &Observation) -> Action {
         let mut feats = std::mem::take(&mut self.feats);
+        feats.resize(OBS_DIM, 0.0);
         self.scale.encode(obs, &mut feats);
         let mut out = [0usize];
-        self.act_rows_players(&feats, &[obs.player as usize % PLAYERS_PER_TEAM], &mut out);
+        let u = [self.uniform_for(obs)];
+        self.act_rows_keyed(
+            &feats,
+            &[obs.player as usize % PLAYERS_PER_TEAM],
+            &u,
+            &mut out,
+        );
         self.feats = feats;
         Action::from_index(out[0]).unwrap_or(Action::Stay)
     }
@@ -295,13 +426,17 @@ impl Policy for LearnedPolicy {
         feats.resize(n * OBS_DIM, 0.0);
         let mut players = std::mem::take(&mut self.players);
         players.clear();
+        let mut keys = std::mem::take(&mut self.keys);
+        keys.clear();
         for (i, o) in obs.iter().take(n).enumerate() {
             self.scale
                 .encode(o, &mut feats[i * OBS_DIM..(i + 1) * OBS_DIM]);
             players.push(o.player as usize % PLAYERS_PER_TEAM);
+            keys.push(self.uniform_for(o));
         }
         let mut acts = vec![0usize; n];
-        self.act_rows_players(&feats, &players, &mut acts);
+        self.act_rows_keyed(&feats, &players, &keys, &mut acts);
+        self.keys = keys;
         for (o, a) in out.iter_mut().zip(acts) {
             *o = Action::from_index(a).unwrap_or(Action::Stay);
         }

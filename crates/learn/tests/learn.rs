@@ -202,3 +202,87 @@ fn same_seed_and_threads_give_identical_metrics() {
         );
     }
 }
+
+/// A sampling PPO team picks the same actions whether each robot has its own
+/// policy (robot connections), one policy answers for the team (a team
+/// connection, `act_batch`) or the evaluator batches rows of many matches
+/// (`act_rows_keyed` with `sample_uniform`); another match seed gives other
+/// draws, and greedy play ignores them.
+#[test]
+fn sampled_actions_do_not_depend_on_batching() {
+    use naosoccer_client::Policy;
+    use naosoccer_learn::policy::sample_uniform;
+    use naosoccer_learn::ActMode;
+    use naosoccer_proto::{Action, Team};
+    use naosoccer_referee::Match;
+
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    tch::manual_seed(5);
+    let cfg = tiny_config(Algo::Ppo, 5);
+    let fresh = |seed: u64| {
+        let mut p = LearnedPolicy::untrained(&cfg, "sampler".into());
+        p.set_mode(ActMode::Sample);
+        p.set_match_seed(seed);
+        p
+    };
+    // Every policy below shares the same weights (one file).
+    let dir = out_dir("sampling_weights");
+    std::fs::create_dir_all(&dir).unwrap();
+    let weights = dir.join("w.safetensors");
+    fresh(0).save(&weights).unwrap();
+    let loaded = |seed: u64| {
+        let mut p = fresh(seed);
+        p.load_weights(&weights).unwrap();
+        p
+    };
+
+    let mut m = Match::new(&cfg.match_config, 77).unwrap();
+    let mut single: Vec<LearnedPolicy> = (0..4).map(|_| loaded(77)).collect();
+    let mut team = loaded(77);
+    let mut rows = loaded(77);
+    let mut other_seed = loaded(78);
+    let mut greedy = loaded(77);
+    greedy.set_mode(ActMode::Greedy);
+    let mut greedy_other = loaded(78);
+    greedy_other.set_mode(ActMode::Greedy);
+    let (mut differs, mut varied) = (0, std::collections::BTreeSet::new());
+    for _ in 0..40 {
+        let obs: Vec<_> = (0..4).map(|p| m.observe(Team::Blue, p)).collect();
+        let a: Vec<Action> = single.iter_mut().zip(&obs).map(|(p, o)| p.act(o)).collect();
+        let mut b = [Action::Stay; 4];
+        team.act_batch(&obs, &mut b);
+        let mut feats = vec![0.0; 4 * OBS_DIM];
+        let mut u = Vec::new();
+        for (i, o) in obs.iter().enumerate() {
+            rows.scale()
+                .encode(o, &mut feats[i * OBS_DIM..(i + 1) * OBS_DIM]);
+            u.push(sample_uniform(77, Team::Blue.index(), i, o.tick));
+        }
+        let mut c = [0usize; 4];
+        rows.act_rows_keyed(&feats, &[0, 1, 2, 3], &u, &mut c);
+        let c: Vec<Action> = c.iter().map(|&i| Action::from_index(i).unwrap()).collect();
+        assert_eq!(a, b.to_vec(), "robot policies vs one team policy");
+        assert_eq!(a, c, "robot policies vs keyed rows");
+        let mut d = [Action::Stay; 4];
+        other_seed.act_batch(&obs, &mut d);
+        differs += usize::from(d.to_vec() != a);
+        let mut g = [Action::Stay; 4];
+        let mut h = [Action::Stay; 4];
+        greedy.act_batch(&obs, &mut g);
+        greedy_other.act_batch(&obs, &mut h);
+        assert_eq!(g, h, "greedy play does not draw");
+        varied.extend(a.iter().map(|x| x.index()));
+        let mut all = [Action::Stay; 8];
+        all[..4].copy_from_slice(&a);
+        m.step(&all);
+    }
+    assert!(
+        differs > 10,
+        "another match seed draws differently ({differs}/40)"
+    );
+    assert!(
+        varied.len() >= 3,
+        "an untrained sampler uses several actions"
+    );
+}

@@ -88,7 +88,8 @@ impl Default for RulesConfig {
 }
 
 /// Weights of the per-robot reward (learn's MDP):
-/// `s = r_goal + r_close + r_control`, reward `sign(s) * ln(1 + |s|)`.
+/// `s = r_goal + r_close + r_control + r_progress`, reward `sign(s) * ln(1 + |s|)`.
+/// The paper's reward has no `r_progress`; its weight is 0 by default.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RewardConfig {
@@ -102,6 +103,12 @@ pub struct RewardConfig {
     pub control: f32,
     /// Subtracted from every robot of a team whose opponent controls the ball.
     pub opponent_control: f32,
+    /// Ours, not the paper's: per metre the ball moved toward the opponent
+    /// goal this tick (negative when it moved toward the own goal), for every
+    /// robot of the team. A potential-based shaping term (the potential is
+    /// the ball's x in the team's frame), so it does not change which
+    /// policies are optimal; 0 (off) by default.
+    pub progress: f32,
 }
 
 impl Default for RewardConfig {
@@ -112,6 +119,7 @@ impl Default for RewardConfig {
             close_scale: 1.0,
             control: 0.5,
             opponent_control: 0.2,
+            progress: 0.0,
         }
     }
 }
@@ -224,6 +232,7 @@ impl MatchConfig {
             ("reward.close", w.close),
             ("reward.control", w.control),
             ("reward.opponent_control", w.opponent_control),
+            ("reward.progress", w.progress),
         ] {
             non_negative(field, v)?;
         }

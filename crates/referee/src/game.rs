@@ -48,6 +48,9 @@ pub struct Match {
     stats: MatchStats,
     /// The team that scored during the last tick (for the reward).
     last_goal: Option<Team>,
+    /// How far the ball moved along +x (blue's attacking direction) during
+    /// the last tick's physics steps, before any restart placed it.
+    ball_dx: f32,
     outcome: Outcome,
 }
 
@@ -81,6 +84,7 @@ impl Match {
             score: [0; 2],
             stats: MatchStats::default(),
             last_goal: None,
+            ball_dx: 0.0,
             outcome: Outcome::default(),
             cfg: cfg.clone(),
         };
@@ -112,6 +116,7 @@ impl Match {
             };
             self.sim.set_command(i, cmd);
         }
+        let ball_x = self.sim.snapshot().ball.pos[0];
         for _ in 0..self.steps_per_tick {
             self.sim.step();
             // Kicks are reported per physics step; gather the tick's.
@@ -126,6 +131,7 @@ impl Match {
                 }
             }
         }
+        self.ball_dx = self.sim.snapshot().ball.pos[0] - ball_x;
         self.run_rules(tick);
         for e in &self.outcome.events {
             apply_stats(&mut self.stats, e);
@@ -325,7 +331,7 @@ impl Match {
     }
 
     /// Per-robot reward of the last tick for `team` (learn's MDP):
-    /// `s = r_goal + r_close + r_control`, returned as `sign(s) * ln(1 + |s|)`
+    /// `s = r_goal + r_close + r_control + r_progress`, returned as `sign(s) * ln(1 + |s|)`
     /// (DESIGN.md explains why not the paper's `-log(s)`).
     pub fn rewards(&self, team: Team) -> [f32; PLAYERS_PER_TEAM] {
         let w = &self.cfg.reward;
@@ -338,6 +344,11 @@ impl Match {
             Some(c) if c.team() != team => -w.opponent_control,
             _ => 0.0,
         };
+        let toward = match team {
+            Team::Blue => self.ball_dx,
+            Team::Red => -self.ball_dx,
+        };
+        let progress = w.progress * toward;
         let snap = self.sim.snapshot();
         std::array::from_fn(|p| {
             let Some(robot) = RobotId::new(team, p) else {
@@ -351,7 +362,7 @@ impl Match {
             } else {
                 0.0
             };
-            log_compress(goal + close + control + opponent)
+            log_compress(goal + close + control + opponent + progress)
         })
     }
 }

@@ -1,0 +1,162 @@
+//! A trained team plays over the socket: `naosoccer client --policy ppo:DIR`
+//! (the real binary) joins a real server as blue, the scripted team plays
+//! red, and the match equals the same match played in process with the same
+//! networks, bit for bit.
+#![cfg(feature = "learn")]
+
+#[path = "server_support.rs"]
+mod support;
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use naosoccer::runner::run_to_end;
+use naosoccer_client::robot::{run_team, TeamRun};
+use naosoccer_client::{Policy, PolicyKind};
+use naosoccer_proto::msg::{EndReason, MatchId, Player};
+use naosoccer_proto::{RobotId, Team};
+use naosoccer_referee::Match;
+use support::*;
+
+fn naosoccer(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_naosoccer"))
+        .args(args)
+        .output()
+        .expect("run naosoccer")
+}
+
+/// A small PPO run written by `naosoccer train` (its weights are whatever a
+/// few updates made of them; what matters here is that they are a real run).
+fn tiny_run() -> PathBuf {
+    let run = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("learn_client_ppo_run");
+    let _ = std::fs::remove_dir_all(&run);
+    let out = naosoccer(&[
+        "train",
+        "--algo",
+        "ppo",
+        "--steps",
+        "1024",
+        "--seed",
+        "5",
+        "--matches",
+        "2",
+        "--rollout",
+        "32",
+        "--epochs",
+        "1",
+        "--minutes",
+        "0.1",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "train failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    run
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn trained_team_plays_over_the_socket_as_in_process() {
+    let run = tiny_run();
+    let spec = format!("ppo:{}", run.display());
+
+    let mut cfg = config(100);
+    cfg.deadline_ms = 30_000; // no misses, however loaded the machine
+    let match_cfg = cfg.match_cfg.clone();
+    let server = start(cfg).await;
+    let addr = server.addr();
+
+    // Blue: the binary, one robot connection per player (like real robots).
+    let blue = tokio::task::spawn_blocking({
+        let (addr, spec) = (addr.clone(), spec.clone());
+        move || {
+            naosoccer(&[
+                "client", "--server", &addr, "--team", "blue", "--token", BLUE, "--match", "1",
+                "--policy", &spec,
+            ])
+        }
+    });
+    let red = tokio::spawn({
+        let run = TeamRun {
+            server: addr.clone(),
+            team: Team::Red,
+            token: RED.to_owned(),
+            match_id: Some(MatchId(1)),
+            players: Player::all().collect(),
+            policy: PolicyKind::Scripted.into(),
+            team_connection: true,
+        };
+        async move { run_team(&run).await }
+    });
+    let blue = blue.await.unwrap();
+    let red = red.await.unwrap().unwrap();
+    let stdout = String::from_utf8_lossy(&blue.stdout);
+    assert!(
+        blue.status.success(),
+        "client failed: {}\n{stdout}",
+        String::from_utf8_lossy(&blue.stderr)
+    );
+    let end = &red[0].end;
+    assert_eq!(end.reason, EndReason::Finished);
+    assert_eq!(
+        end.misses.blue, [0; 4],
+        "the trained team answered every tick"
+    );
+    assert!(
+        stdout.contains(&format!("blue {} - {} red", end.score.blue, end.score.red)),
+        "the client reports the final score: {stdout}"
+    );
+    assert!(stdout.contains("blue: goals"), "{stdout}");
+
+    // The same match in process: the same networks for blue, scripted red.
+    let policies: Vec<Box<dyn Policy>> = RobotId::all()
+        .map(|robot| match robot.team() {
+            Team::Blue => naosoccer_learn::load_policy_for_match(&spec, 42).unwrap(),
+            Team::Red => PolicyKind::Scripted.build(42, robot),
+        })
+        .collect();
+    let out = run_to_end(Match::new(&match_cfg, 42).unwrap(), policies, |_| {});
+    assert_eq!(end.tick, out.ticks);
+    assert_eq!(end.score.blue, out.score.blue);
+    assert_eq!(end.score.red, out.score.red);
+    assert_eq!(end.stats, out.stats, "same semantics through the socket");
+    assert_eq!(
+        end.state_hash,
+        format!("{:016x}", out.state_hash),
+        "same final state, bit for bit"
+    );
+    server.stop().await;
+}
+
+#[test]
+fn bad_policy_specs_fail_before_joining() {
+    let out = naosoccer(&[
+        "client",
+        "--team",
+        "blue",
+        "--token",
+        "x",
+        "--server",
+        "127.0.0.1:9",
+        "--policy",
+        "ppo:/nonexistent-run-dir",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("loading --policy ppo:/nonexistent-run-dir"),
+        "{err}"
+    );
+
+    let out = naosoccer(&[
+        "client", "--team", "blue", "--token", "x", "--policy", "greedy",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("unknown policy \"greedy\"") && err.contains("ppo:DIR"),
+        "{err}"
+    );
+}
