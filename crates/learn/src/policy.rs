@@ -6,7 +6,8 @@
 //! How a network picks an action ([`ActMode`]): a PPO team samples from its
 //! policy distribution (`ppo:DIR`, the trained policy as it was trained) or
 //! takes the most likely action (`ppo-greedy:DIR`); a DQN team takes the
-//! largest Q-value (`dqn:DIR`). Sampling draws one number per robot and tick
+//! largest Q-value (`dqn:DIR`) or acts epsilon-greedily with its training
+//! run's epsilon (`dqn-epsilon:DIR`). Sampling draws one number per robot and tick
 //! from a counter-based hash of (match seed, team, player, tick), so a
 //! sampled match is the same in process, over robot connections or over a
 //! team connection, whatever the batching.
@@ -30,12 +31,15 @@ use crate::train::{Algo, TrainConfig};
 use crate::LearnError;
 
 /// How a trained network turns its outputs into an action.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ActMode {
     /// The largest output (PPO: most likely action; DQN: largest Q-value).
     Greedy,
     /// PPO only: an action drawn from the softmax of the logits.
     Sample,
+    /// With probability `epsilon` a uniformly random action, else greedy
+    /// (DQN's behaviour policy in training).
+    EpsilonGreedy { epsilon: f32 },
 }
 
 /// The uniform number in [0, 1) a sampling robot uses at `tick`: a hash of
@@ -153,14 +157,13 @@ impl LearnedPolicy {
         };
         let (kind, path) = spec
             .split_once(':')
-            .ok_or_else(|| bad("expected ppo:DIR, ppo-greedy:DIR or dqn:DIR"))?;
-        let (algo, mode) = match kind {
-            "ppo" => (Algo::Ppo, ActMode::Sample),
-            "ppo-greedy" => (Algo::Ppo, ActMode::Greedy),
-            "dqn" => (Algo::Dqn, ActMode::Greedy),
+            .ok_or_else(|| bad("expected ppo:DIR, ppo-greedy:DIR, dqn:DIR or dqn-epsilon:DIR"))?;
+        let algo = match kind {
+            "ppo" | "ppo-greedy" => Algo::Ppo,
+            "dqn" | "dqn-epsilon" => Algo::Dqn,
             other => {
                 return Err(bad(&format!(
-                    "unknown kind {other:?} (expected ppo, ppo-greedy or dqn)"
+                    "unknown kind {other:?} (expected ppo, ppo-greedy, dqn or dqn-epsilon)"
                 )))
             }
         };
@@ -181,7 +184,13 @@ impl LearnedPolicy {
             });
         }
         let mut p = LearnedPolicy::untrained(&cfg, format!("{kind}:{path}"));
-        p.mode = mode;
+        p.mode = match kind {
+            "ppo" => ActMode::Sample,
+            "dqn-epsilon" => ActMode::EpsilonGreedy {
+                epsilon: cfg.dqn.epsilon as f32,
+            },
+            _ => ActMode::Greedy,
+        };
         p.load_weights(&weights)?;
         Ok(p)
     }
@@ -272,7 +281,7 @@ impl LearnedPolicy {
     pub fn act_rows_players(&mut self, obs: &[f32], players: &[usize], out: &mut [usize]) {
         let mut keys = std::mem::take(&mut self.keys);
         keys.clear();
-        if self.mode == ActMode::Sample {
+        if self.mode != ActMode::Greedy {
             let call = self.calls;
             keys.extend((0..out.len()).map(|i| sample_uniform(self.match_seed, i, 0, call)));
         }
@@ -291,6 +300,18 @@ impl LearnedPolicy {
         uniforms: &[f32],
         out: &mut [usize],
     ) {
+        self.decide(obs, players, uniforms, out);
+        if let ActMode::EpsilonGreedy { epsilon } = self.mode {
+            for (a, &u) in out.iter_mut().zip(uniforms) {
+                if u < epsilon {
+                    // Given u < epsilon, u / epsilon is uniform on [0, 1).
+                    *a = ((u / epsilon * ACTIONS as f32) as usize).min(ACTIONS - 1);
+                }
+            }
+        }
+    }
+
+    fn decide(&mut self, obs: &[f32], players: &[usize], uniforms: &[f32], out: &mut [usize]) {
         let n = out.len();
         match &self.model {
             Model::Ppo(ac) => {

@@ -246,6 +246,11 @@ fn sampled_actions_do_not_depend_on_batching() {
     greedy.set_mode(ActMode::Greedy);
     let mut greedy_other = loaded(78);
     greedy_other.set_mode(ActMode::Greedy);
+    let mut eps_none = loaded(77);
+    eps_none.set_mode(ActMode::EpsilonGreedy { epsilon: 0.0 });
+    let mut eps_all = loaded(77);
+    eps_all.set_mode(ActMode::EpsilonGreedy { epsilon: 1.0 });
+    let mut uniform_actions = std::collections::BTreeSet::new();
     let (mut differs, mut varied) = (0, std::collections::BTreeSet::new());
     for _ in 0..40 {
         let obs: Vec<_> = (0..4).map(|p| m.observe(Team::Blue, p)).collect();
@@ -272,6 +277,11 @@ fn sampled_actions_do_not_depend_on_batching() {
         greedy.act_batch(&obs, &mut g);
         greedy_other.act_batch(&obs, &mut h);
         assert_eq!(g, h, "greedy play does not draw");
+        let mut e = [Action::Stay; 4];
+        eps_none.act_batch(&obs, &mut e);
+        assert_eq!(e, g, "epsilon 0 is greedy");
+        eps_all.act_batch(&obs, &mut e);
+        uniform_actions.extend(e.iter().map(|x| x.index()));
         varied.extend(a.iter().map(|x| x.index()));
         let mut all = [Action::Stay; 8];
         all[..4].copy_from_slice(&a);

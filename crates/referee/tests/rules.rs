@@ -439,3 +439,37 @@ fn rewards_share_the_goal_and_favour_the_controller() {
     m.step(&STAY);
     assert!(m.rewards(Team::Blue).iter().all(|r| r.abs() < 1.0));
 }
+
+/// `reward.progress` pays each team for the metres the ball moved toward the
+/// opponent goal in the tick (and charges the other team as much); at its
+/// default of 0 the reward is the paper's.
+#[test]
+fn progress_reward_follows_the_ball_toward_the_goal() {
+    let staged = |progress: f32, vx: f32| {
+        let mut cfg = MatchConfig::default();
+        cfg.reward.progress = progress;
+        // Only the progress term is left, so its sign and size show.
+        cfg.reward.close = 0.0;
+        cfg.reward.control = 0.0;
+        cfg.reward.opponent_control = 0.0;
+        let mut m = Match::new(&cfg, 3).unwrap();
+        clear_the_pitch(&mut m);
+        m.sim_mut().place_ball(0.0, 0.0);
+        m.sim_mut().set_ball_velocity(vx, 0.0);
+        let before = ball_xy(&m).0;
+        m.step(&STAY);
+        let dx = ball_xy(&m).0 - before;
+        (dx, m.rewards(Team::Blue), m.rewards(Team::Red))
+    };
+    let (dx, blue, red) = staged(2.0, 1.5);
+    assert!(dx > 0.05, "the ball rolled toward red's goal: {dx}");
+    let expected = (2.0 * dx).ln_1p();
+    for (b, r) in blue.iter().zip(&red) {
+        assert!((b - expected).abs() < 1e-4, "blue {b} vs {expected}");
+        assert!((r + expected).abs() < 1e-4, "red {r} vs {}", -expected);
+    }
+    let (_, blue, red) = staged(2.0, -1.5);
+    assert!(blue.iter().all(|&b| b < -0.05) && red.iter().all(|&r| r > 0.05));
+    let (_, blue, red) = staged(0.0, 1.5);
+    assert_eq!((blue, red), ([0.0; 4], [0.0; 4]), "off by default");
+}
