@@ -6,13 +6,15 @@
     python3 scripts/learning-table.py ppo-1.json ppo-2.json dqn-1.json ...
 
 One row per file (the blue team's figures, mean ± 95% CI over its matches),
-then one row per algorithm pooling the matches of all its files (the prefix of
-the blue team's name before ':' names the algorithm: ppo, ppo-greedy, dqn,
-or the built-in team). Standard library only.
+then one row per group pooling the matches of all its files: a group is the
+blue team's name without its trailing seed (`ppo:assets/policies/ppo-seed1`
+and `ppo:assets/policies/ppo-seed2` pool as `ppo:assets/policies/ppo`).
+Standard library only.
 """
 
 import json
 import math
+import re
 import sys
 
 # Two-sided 95% Student-t quantiles; above 120 degrees of freedom, the normal's.
@@ -38,8 +40,8 @@ def mean_ci(xs):
 
 
 def per_match(result):
-    """Per-match blue figures: goals, goals against, win/draw/loss (control,
-    passes and shots are only summarised in the file)."""
+    """Per-match (blue goals, red goals); control, passes and shots are only
+    summarised in the file."""
     return [(b, r) for b, r in result["scores"]]
 
 
@@ -65,9 +67,10 @@ def main(paths):
         print(row(r["blue"]["name"], r))
     groups = {}
     for _, r in results:
-        groups.setdefault(r["blue"]["name"].split(":")[0], []).append(r)
+        key = re.sub(r"[-_]?seed\d+$", "", r["blue"]["name"])
+        groups.setdefault(key, []).append(r)
     print()
-    print("| algorithm (pooled) | matches | goals / match | goals conceded / match "
+    print("| team (runs pooled) | matches | goals / match | goals conceded / match "
           "| ball control (mean of runs) | W / D / L |")
     print("|---|---|---|---|---|---|")
     for algo, rs in groups.items():
@@ -78,7 +81,8 @@ def main(paths):
         w = sum(b > r_ for b, r_ in scores)
         d = sum(b == r_ for b, r_ in scores)
         l_ = sum(b < r_ for b, r_ in scores)
-        print(f"| {algo} ({len(rs)} runs) | {len(scores)} | {gf[0]:.2f} ± {gf[1]:.2f} | "
+        runs = f"{len(rs)} run{'s' if len(rs) > 1 else ''}"
+        print(f"| {algo} ({runs}) | {len(scores)} | {gf[0]:.2f} ± {gf[1]:.2f} | "
               f"{ga[0]:.2f} ± {ga[1]:.2f} | {ctl[0]:.1f}% ± {ctl[1]:.1f} | {w} / {d} / {l_} |")
 
 

@@ -16,10 +16,11 @@ printed and the command exits 0.
 
 --policy takes a built-in team (scripted, random, idle) or a trained one: \
 ppo:DIR or dqn:DIR (a `naosoccer train` run directory, e.g. \
-assets/policies/ppo-seed1) or ppo:DIR/checkpoints/step-N.safetensors. A PPO \
+assets/policies/ppo-paper-seed1) or ppo:DIR/checkpoints/step-N.safetensors. A PPO \
 team samples its actions (seeded by the match seed, so the match is \
 repeatable); ppo-greedy:DIR takes the most likely action instead; a DQN team \
-takes the largest Q-value. A trained team over --team-connection runs all its \
+takes the largest Q-value (dqn-epsilon:DIR: epsilon-greedy with its training \
+epsilon). A trained team over --team-connection runs all its \
 players in one forward pass per tick.")]
 pub struct ClientArgs {
     /// Server address.

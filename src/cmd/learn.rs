@@ -193,7 +193,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
 #[derive(Args, Debug)]
 #[command(after_help = "Examples:
   naosoccer eval --blue ppo:runs/ppo-1 --red scripted --matches 50 --seed 1
-  naosoccer eval --blue ppo:assets/policies/ppo-seed1 --red dqn:assets/policies/dqn-seed1
+  naosoccer eval --blue ppo:assets/policies/ppo-paper-seed1 --red dqn:assets/policies/dqn-seed1
 
 Each match i has a seed derived from --seed and i, so two evaluations with the
 same --seed play the same matches. Prints average goals, ball-control rate,
@@ -201,9 +201,10 @@ passes, shots (mean ± 95% CI over matches) and wins/draws/losses per team.
 
 A PPO team (ppo:DIR) samples its actions from its policy, drawing from a hash
 of the match seed, robot and tick; ppo-greedy:DIR takes the most likely action;
-dqn:DIR takes the largest Q-value.")]
+dqn:DIR takes the largest Q-value; dqn-epsilon:DIR acts epsilon-greedily with
+its training run's epsilon.")]
 pub struct EvalArgs {
-    /// Blue team: scripted, random, idle, ppo:DIR, ppo-greedy:DIR or dqn:DIR.
+    /// Blue team: scripted, random, idle, ppo:DIR, ppo-greedy:DIR, dqn:DIR or dqn-epsilon:DIR.
     #[arg(long)]
     blue: String,
     /// Red team: as --blue.

@@ -1,0 +1,125 @@
+//! The trained teams shipped in assets/policies/ load, play, and reproduce
+//! the evaluation docs/LEARNING.md reports for them (each directory keeps
+//! that evaluation's output as eval.json).
+#![cfg(feature = "learn")]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn policies() -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/policies");
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(&root)
+        .expect("assets/policies exists")
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.join("final.safetensors").exists())
+        .collect();
+    dirs.sort();
+    dirs
+}
+
+/// `ppo:DIR` or `dqn:DIR` from the directory name (`ppo-paper-seed1`, `dqn-seed2`).
+fn spec(dir: &Path) -> String {
+    let name = dir.file_name().unwrap().to_str().unwrap();
+    let algo = name.split('-').next().unwrap();
+    format!("{algo}:{}", dir.display())
+}
+
+fn eval(args: &[&str]) -> Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_naosoccer"))
+        .arg("eval")
+        .args(args)
+        .arg("--json")
+        .output()
+        .expect("run naosoccer eval");
+    assert!(
+        out.status.success(),
+        "eval {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("eval --json prints one JSON object")
+}
+
+#[test]
+fn every_shipped_policy_loads_and_plays() {
+    let dirs = policies();
+    let names: Vec<String> = dirs
+        .iter()
+        .map(|d| d.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    for algo in ["ppo", "dqn"] {
+        let seeds = names.iter().filter(|n| n.starts_with(algo)).count();
+        assert!(
+            seeds >= 3,
+            "{algo}: at least 3 training seeds ship, found {names:?}"
+        );
+    }
+    for d in &dirs {
+        assert!(
+            d.join("eval.json").exists() && d.join("metrics.csv").exists(),
+            "{} keeps its evaluation and its training curve",
+            d.display()
+        );
+        let v = eval(&["--blue", &spec(d), "--matches", "2", "--minutes", "0.5"]);
+        assert_eq!(v["scores"].as_array().unwrap().len(), 2);
+    }
+}
+
+/// The documented evaluation (50 ten-minute matches against the scripted
+/// team) played again. On the machine that made it the figures come out
+/// identical; libtorch may pick other float kernels on another CPU, which
+/// changes single draws and so single matches, so elsewhere the test allows
+/// the figures to move within their 95% confidence intervals.
+#[test]
+fn shipped_policies_reproduce_their_documented_evaluation() {
+    for d in policies()
+        .iter()
+        .filter(|d| d.ends_with("ppo-paper-seed1") || d.ends_with("dqn-seed1"))
+    {
+        let doc: Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("eval.json")).unwrap()).unwrap();
+        let matches = doc["matches"].as_u64().unwrap().to_string();
+        let seed = doc["seed"].as_u64().unwrap().to_string();
+        let minutes = doc["minutes"].as_f64().unwrap().to_string();
+        let red = doc["red"]["name"].as_str().unwrap();
+        let got = eval(&[
+            "--blue",
+            &spec(d),
+            "--red",
+            red,
+            "--matches",
+            &matches,
+            "--seed",
+            &seed,
+            "--minutes",
+            &minutes,
+        ]);
+        let same = got["scores"] == doc["scores"];
+        eprintln!(
+            "{}: {}",
+            d.display(),
+            if same {
+                "every match as documented"
+            } else {
+                "other matches than documented (another CPU?); checking the figures"
+            }
+        );
+        for team in ["blue", "red"] {
+            for figure in ["goals", "control_rate_percent", "passes"] {
+                let (a, b) = (&got[team][figure], &doc[team][figure]);
+                let (ma, mb) = (a["mean"].as_f64().unwrap(), b["mean"].as_f64().unwrap());
+                let ci = a["ci95"].as_f64().unwrap() + b["ci95"].as_f64().unwrap();
+                if same {
+                    assert_eq!(ma, mb, "{}: {team} {figure}", d.display());
+                } else {
+                    assert!(
+                        (ma - mb).abs() <= ci.max(0.1),
+                        "{}: {team} {figure} {ma} vs documented {mb} (± {ci})",
+                        d.display()
+                    );
+                }
+            }
+        }
+    }
+}
