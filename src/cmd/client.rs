@@ -1,8 +1,8 @@
 //! `naosoccer client`: one team's robot clients.
+use super::team::TeamSpec;
 use anyhow::Context;
 use clap::Args;
 use naosoccer_client::robot::{run_team, TeamRun};
-use naosoccer_client::{PolicyKind, TeamPolicy};
 use naosoccer_proto::msg::{MatchId, Player};
 use naosoccer_proto::Team;
 
@@ -58,7 +58,7 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
         token: args.token.clone(),
         match_id: args.match_id.map(MatchId),
         players,
-        policy: team_policy(&args.policy)?,
+        policy: TeamSpec::parse(&args.policy, "--policy")?.team_policy(),
         team_connection: args.team_connection,
     };
     let rt = tokio::runtime::Builder::new_multi_thread()
@@ -90,38 +90,4 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
         misses
     );
     Ok(())
-}
-
-/// A built-in policy name or a trained team's spec, loaded once here so that
-/// a bad path or a mismatched checkpoint fails before the client joins.
-fn team_policy(spec: &str) -> anyhow::Result<TeamPolicy> {
-    if !spec.contains(':') {
-        let kind: PolicyKind = spec
-            .parse()
-            .map_err(|e| anyhow::anyhow!("{e}, or a trained team such as ppo:DIR or dqn:DIR"))?;
-        return Ok(kind.into());
-    }
-    learned(spec)
-}
-
-#[cfg(feature = "learn")]
-fn learned(spec: &str) -> anyhow::Result<TeamPolicy> {
-    naosoccer_learn::load_policy(spec).with_context(|| format!("loading --policy {spec}"))?;
-    let owned = spec.to_owned();
-    Ok(TeamPolicy::Custom {
-        name: spec.to_owned(),
-        batched: true,
-        build: std::sync::Arc::new(move |seed, _robot| {
-            naosoccer_learn::load_policy_for_match(&owned, seed)
-                .map_err(|e| format!("loading {owned}: {e}"))
-        }),
-    })
-}
-
-#[cfg(not(feature = "learn"))]
-fn learned(spec: &str) -> anyhow::Result<TeamPolicy> {
-    anyhow::bail!(
-        "--policy {spec}: this naosoccer was built without learning support \
-         (--no-default-features); build it with the default features to play trained teams"
-    )
 }

@@ -7,3 +7,4 @@ pub mod play;
 pub mod record;
 pub mod server;
 pub mod soak;
+pub mod team;

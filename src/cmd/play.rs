@@ -8,7 +8,9 @@ use anyhow::Context;
 use clap::Args;
 use naosoccer::runner::{self, MatchOutcome};
 use naosoccer_client::PolicyKind;
-use naosoccer_proto::{Action, Event, TeamStats, ROBOTS};
+use naosoccer_proto::{Action, Event, RobotId, Team, TeamStats, ROBOTS};
+
+use super::team::TeamSpec;
 use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RecordingSummary};
 use naosoccer_referee::{Match, MatchConfig};
 use naosoccer_sim::{BareWorld, RobotModel};
@@ -38,12 +40,13 @@ pub struct MatchArgs {
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Blue's policy, one instance per robot: scripted (the paper's
-    /// rule-based team), random or idle.
+    /// rule-based team), random, idle, or a trained team (ppo:DIR, dqn:DIR,
+    /// e.g. ppo:assets/policies/ppo-paper-seed1; docs/LEARNING.md).
     #[arg(long, default_value = "scripted", value_name = "POLICY")]
-    blue: PolicyKind,
-    /// Red's policy: scripted, random or idle.
+    blue: String,
+    /// Red's policy: as --blue.
     #[arg(long, default_value = "scripted", value_name = "POLICY")]
-    red: PolicyKind,
+    red: String,
     /// Match length in minutes of game time (overrides the config).
     #[arg(long, value_name = "M")]
     minutes: Option<f32>,
@@ -70,17 +73,23 @@ fn load_config(path: Option<&PathBuf>, minutes: Option<f32>) -> anyhow::Result<M
 
 pub fn run(args: MatchArgs) -> anyhow::Result<()> {
     let cfg = load_config(args.config.as_ref(), args.minutes)?;
+    let blue = TeamSpec::parse(&args.blue, "--blue")?;
+    let red = TeamSpec::parse(&args.red, "--red")?;
+    let policies = RobotId::all()
+        .map(|robot| match robot.team() {
+            Team::Blue => blue.build(args.seed, robot),
+            Team::Red => red.build(args.seed, robot),
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let show_progress = std::io::stdout().is_terminal();
     let mut last_shown = 0;
     let mut recording = match &args.record {
         Some(path) => Some(MatchRecording::start(path, &cfg, &args)?),
         None => None,
     };
-    let outcome = runner::play_match_with(
-        &cfg,
-        args.seed,
-        &args.blue,
-        &args.red,
+    let outcome = runner::run_to_end_with(
+        Match::new(&cfg, args.seed)?,
+        policies,
         |m, actions, events| {
             if let Some(r) = &mut recording {
                 r.tick(m, actions, events);
@@ -101,7 +110,7 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
                 }
             }
         },
-    )?;
+    );
     let recorded = match recording {
         Some(r) => Some(r.report()?),
         None => None,
@@ -140,7 +149,7 @@ struct RecordingReport {
 impl MatchRecording {
     fn start(path: &std::path::Path, cfg: &MatchConfig, args: &MatchArgs) -> anyhow::Result<Self> {
         let m = Match::new(cfg, args.seed)?;
-        let meta = MatchMeta::of(&m, &args.blue.to_string(), &args.red.to_string(), "match");
+        let meta = MatchMeta::of(&m, &args.blue, &args.red, "match");
         let rec = Recorder::create(path, &meta, &m, RecorderOptions::default())
             .with_context(|| format!("creating {}", path.display()))?;
         Ok(MatchRecording {
