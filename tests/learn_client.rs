@@ -10,7 +10,7 @@ mod support;
 use std::path::PathBuf;
 use std::process::Command;
 
-use naosoccer::runner::run_to_end;
+use naosoccer::runner::run_to_end_with;
 use naosoccer_client::robot::{run_team, TeamRun};
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::msg::{EndReason, MatchId, Player};
@@ -117,7 +117,25 @@ async fn trained_team_plays_over_the_socket_as_in_process() {
             Team::Red => PolicyKind::Scripted.build(42, robot),
         })
         .collect();
-    let out = run_to_end(Match::new(&match_cfg, 42).unwrap(), policies, |_| {});
+    let mut returns = [0.0f32; 4];
+    let out = run_to_end_with(Match::new(&match_cfg, 42).unwrap(), policies, |m, _, _| {
+        for (ret, r) in returns.iter_mut().zip(m.rewards(Team::Blue)) {
+            *ret += r;
+        }
+    });
+    // The client prints each robot's return from the rewards it was sent.
+    let printed: Vec<String> = returns
+        .iter()
+        .enumerate()
+        .map(|(p, r)| format!("robot {p} {r:.2}"))
+        .collect();
+    assert!(
+        stdout.contains(&format!(
+            "blue: return (sum of the match configuration's reward): {}",
+            printed.join(", ")
+        )),
+        "{stdout}"
+    );
     assert_eq!(end.tick, out.ticks);
     assert_eq!(end.score.blue, out.score.blue);
     assert_eq!(end.score.red, out.score.red);

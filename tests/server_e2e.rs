@@ -32,6 +32,7 @@ fn team_run(addr: &str, team: Team, policy: PolicyKind, team_connection: bool) -
 async fn eight_robot_clients_match_the_in_process_runner() {
     let mut cfg = config(150);
     cfg.deadline_ms = 30_000; // no misses, however loaded the machine
+    cfg.match_cfg.reward.progress = 1.0; // every reward term in play
     let match_cfg = cfg.match_cfg.clone();
     let server = start(cfg).await;
     let addr = server.addr();
@@ -58,6 +59,34 @@ async fn eight_robot_clients_match_the_in_process_runner() {
         assert_eq!(r.end.stats, stats, "same semantics through the socket");
         assert_eq!(r.end.state_hash, hash, "same final state, bit for bit");
     }
+
+    // Each robot's return from the rewards the server sent equals the sum of
+    // `Match::rewards` over the same match in process, bit for bit.
+    let mut returns = [[0.0f32; PLAYERS_PER_TEAM]; 2];
+    naosoccer::runner::play_match_with(
+        &match_cfg,
+        42,
+        &PolicyKind::Scripted,
+        &PolicyKind::Random,
+        |m, _, _| {
+            for team in [Team::Blue, Team::Red] {
+                for (ret, r) in returns[team.index()].iter_mut().zip(m.rewards(team)) {
+                    *ret += r;
+                }
+            }
+        },
+    )
+    .unwrap();
+    for (team, results) in [(Team::Blue, &blue), (Team::Red, &red)] {
+        for r in results {
+            let p = r.players[0].index();
+            assert_eq!(r.returns, [returns[team.index()][p]], "{team} robot {p}");
+        }
+    }
+    assert!(
+        returns.iter().flatten().any(|&r| r != 0.0),
+        "the rewards are not all zero"
+    );
     server.stop().await;
 }
 

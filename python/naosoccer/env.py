@@ -38,8 +38,11 @@ class NaoSoccerParallelEnv(ParallelEnv):
     vectors of :data:`naosoccer.obs.OBS_DIM` (layout in docs/PYTHON.md),
     actions ``Discrete(5)``: 0 forward, 1 turn_left, 2 turn_right, 3 shoot,
     4 stay. One ``step`` is one control tick of the match (lockstep: the server
-    waits for the four actions). Rewards are the shaped per-robot reward of
-    :func:`naosoccer.obs.team_rewards`. The episode is the whole match: when
+    waits for the four actions). Rewards are each robot's reward as the server
+    sends it (protocol 1.1: the ``[reward]`` section of the server's match
+    configuration, the learning crate's MDP); with ``reward_weights`` they are
+    computed here instead by :func:`naosoccer.obs.team_rewards` with those
+    weights (also against a 1.0 server, which sends none). The episode is the whole match: when
     its clock runs out every agent is terminated (truncated if the server
     shuts down) and the final ``infos`` carry the match statistics.
 
@@ -86,7 +89,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
         server_args: Sequence[str] = (),
         deadline_ms: Optional[int] = 600_000,
         field: FieldScale = FieldScale(),
-        reward_weights: RewardWeights = RewardWeights(),
+        reward_weights: Optional[RewardWeights] = None,
         on_match: Optional[Callable[[int], None]] = None,
         timeout: float = 120.0,
     ) -> None:
@@ -128,6 +131,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
         self._tick = 0
         self._last: Optional[Dict[str, Any]] = None
         self._last_vecs: List[np.ndarray] = []
+        self._last_rewards: List[Optional[float]] = []
         self._in_match = False
 
     # ------------------------------------------------------------ spaces
@@ -226,7 +230,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
             after: Optional[Dict[str, Any]] = self._last
             goals_for = after["score"]["own"] - before["score"]["own"]
             goals_against = after["score"]["opponent"] - before["score"]["opponent"]
-            rew = team_rewards(self.reward_weights, after, goals_for, goals_against)
+            rew = self._rewards(self._last_rewards, after, goals_for, goals_against)
             events = _events(before, after, goals_for, goals_against)
             agents = self.agents
             obs = dict(zip(agents, self._last_vecs))
@@ -244,7 +248,8 @@ class NaoSoccerParallelEnv(ParallelEnv):
         own, opp = end["score"][self.team], end["score"][other]
         goals_for = own - before["score"]["own"]
         goals_against = opp - before["score"]["opponent"]
-        rew = team_rewards(self.reward_weights, None, goals_for, goals_against)
+        sent = end.get("rewards", {}).get(self.team)
+        rew = self._rewards(sent or [None] * protocol.PLAYERS_PER_TEAM, None, goals_for, goals_against)
         events = _events(before, None, goals_for, goals_against)
         # No observation follows the last tick; the last one stands in, with
         # the clock at zero and the final score (copies: the caller may still
@@ -277,6 +282,20 @@ class NaoSoccerParallelEnv(ParallelEnv):
         self._tick = int(msg["tick"])
         self._last = observations[0]
         self._last_vecs = self._encoder.encode_team(observations)
+        self._last_rewards = [o.get("reward") for o in observations]
+
+    def _rewards(
+        self,
+        sent: Sequence[Optional[float]],
+        after: Optional[Dict[str, Any]],
+        goals_for: int,
+        goals_against: int,
+    ) -> List[float]:
+        """The server's rewards, unless weights were given or it sent none."""
+        if self.reward_weights is None and all(r is not None for r in sent):
+            return [float(r) for r in sent]  # type: ignore[arg-type]
+        w = self.reward_weights or RewardWeights()
+        return team_rewards(w, after, goals_for, goals_against)
 
     def _info(self, player: int, events: List[Dict[str, Any]]) -> Dict[str, Any]:
         last = self._last or {}

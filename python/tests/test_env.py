@@ -1,14 +1,19 @@
 """NaoSoccerParallelEnv against a real server it starts itself."""
 
 import json
+import math
 import subprocess
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
 from pettingzoo.test import parallel_api_test, parallel_seed_test
 
-from naosoccer import FEATURE_NAMES, NaoSoccerError, NaoSoccerParallelEnv, protocol
+from naosoccer import FEATURE_NAMES, NaoSoccerError, NaoSoccerParallelEnv, RewardWeights, protocol, team_rewards
+from naosoccer.obs import log_compress
+
+TRAIN_TOML = Path(__file__).resolve().parents[2] / "assets" / "train.toml"
 
 STAY = protocol.ACTION_INDEX["stay"]
 
@@ -47,6 +52,56 @@ def play(env, seed, steps, policy):
         trace.append(np.stack([obs[a] for a in env.possible_agents]))
         rewards.append([rew[a] for a in env.possible_agents])
     return np.stack(trace), np.array(rewards)
+
+
+def play_to_end(env, seed, policy):
+    """Plays a whole match; per tick the rewards and the raw observation
+    (player 0's, as the server sent it) before and after."""
+    env.reset(seed=seed)
+    ticks = []
+    t = 0
+    while env.agents:
+        before = env._last
+        _, rew, _, _, _ = env.step({a: policy(t, p) for p, a in enumerate(env.agents)})
+        ticks.append(([rew[a] for a in env.possible_agents], before, env._last if env.agents else None))
+        t += 1
+    return ticks
+
+
+def wander(t, p):
+    return (t // 5 + p) % 4  # forward, turns and shots, never stay
+
+
+def test_server_rewards_agree_with_the_client_side_terms(make_env):
+    # The default configuration's reward as the server sends it (float32)
+    # and as team_rewards computes it from the observations (float64).
+    sent = play_to_end(make_env(minutes=0.2), 3, wander)
+    local = play_to_end(make_env(minutes=0.2, reward_weights=RewardWeights()), 3, wander)
+    assert len(sent) == len(local) == 120
+    for t, ((a, _, _), (b, _, _)) in enumerate(zip(sent[:-1], local[:-1])):
+        assert a == pytest.approx(b, abs=1e-5), f"tick {t}"
+    # The last tick: no observation follows, so the client side pays only
+    # the goal term; the server's match_end carries the whole reward.
+    assert local[-1][0] == [0.0] * 4
+    assert all(r != 0.0 for r in sent[-1][0])
+
+
+def test_server_rewards_follow_the_servers_match_configuration(make_env):
+    # assets/train.toml (the shipped policies' training reward) pays
+    # `progress`, which no observation-only computation can reproduce on a
+    # goal tick: the server's rewards carry it.
+    env = make_env(minutes=0.2, server_args=["--match-config", str(TRAIN_TOML)])
+    w = RewardWeights(goal=10.0, close=0.02, control=0.02, opponent_control=0.02)
+    moved = 0
+    for t, (rew, before, after) in enumerate(play_to_end(env, 3, wander)):
+        if after is None or after["score"] != before["score"]:
+            continue  # the last tick and goal ticks: no observation shows the ball's move
+        dx = after["ball"]["x"] - before["ball"]["x"]
+        moved += abs(dx) > 1e-3
+        raw = [math.copysign(math.expm1(abs(r)), r) for r in team_rewards(w, after, 0, 0)]
+        expected = [log_compress(s + 1.0 * dx) for s in raw]
+        assert rew == pytest.approx(expected, abs=1e-4), f"tick {t}"
+    assert moved > 10, "the ball moved, so progress was paid"
 
 
 def test_seeded_resets_repeat(make_env):

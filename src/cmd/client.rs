@@ -89,5 +89,23 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
         s.out_of_bounds,
         misses
     );
+    let mut returns: Vec<(u8, f32)> = results
+        .iter()
+        .flat_map(|r| {
+            r.players
+                .iter()
+                .map(|p| p.index() as u8)
+                .zip(r.returns.iter().copied())
+        })
+        .collect();
+    returns.sort_by_key(|&(p, _)| p);
+    let returns: Vec<String> = returns
+        .iter()
+        .map(|(p, r)| format!("robot {p} {r:.2}"))
+        .collect();
+    println!(
+        "{team}: return (sum of the match configuration's reward): {}",
+        returns.join(", ")
+    );
     Ok(())
 }

@@ -339,7 +339,7 @@ async fn team(ctx: &Ctx, id: MatchId, team: Team) {
                 PolicyKind::Scripted.build(joined.seed, robot)
             })
             .collect();
-        c.play(&joined, &mut policies).await
+        c.play(&joined, &mut policies).await.map(|p| p.end)
     }
     .await;
     match r {

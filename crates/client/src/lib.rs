@@ -12,6 +12,6 @@ pub mod net;
 pub mod policy;
 pub mod robot;
 
-pub use net::{Client, ClientError, Push};
+pub use net::{Client, ClientError, Played, Push};
 pub use policy::{ParsePolicyError, Policy, PolicyKind};
 pub use robot::{PolicyFactory, TeamPolicy};

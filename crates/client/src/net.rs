@@ -61,6 +61,16 @@ pub enum Push {
     Error(ErrorMsg),
 }
 
+/// How a match [`Client::play`] played ended.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Played {
+    pub end: MatchEnd,
+    /// Each joined player's return, in join order: the sum over the match of
+    /// its rewards (each observation's `reward`, then `match_end`'s
+    /// `rewards` for the last tick).
+    pub returns: Vec<f32>,
+}
+
 /// One connection to a match server, after a successful handshake.
 #[derive(Debug)]
 pub struct Client {
@@ -242,12 +252,15 @@ impl Client {
     /// policies, their actions go back tagged with the tick. `policies` holds
     /// either one policy per joined player (in join order; each gets its own
     /// player's observation) or one policy for all of them (`act_batch`).
+    /// Returns the match end and each player's return.
     pub async fn play(
         &mut self,
         joined: &Joined,
         policies: &mut [Box<dyn Policy>],
-    ) -> Result<MatchEnd, ClientError> {
+    ) -> Result<Played, ClientError> {
         let n = joined.players.len();
+        // Summed in tick order in f32, as `Match::rewards` summed in process.
+        let mut returns = vec![0.0f32; n];
         if policies.len() != n && policies.len() != 1 {
             return Err(ClientError::Policies(format!(
                 "{} policies for {n} players",
@@ -258,7 +271,12 @@ impl Client {
         loop {
             let obs = match self.next_push().await? {
                 Push::Observation(o) => o,
-                Push::MatchEnd(end) => return Ok(end),
+                Push::MatchEnd(end) => {
+                    for (ret, p) in returns.iter_mut().zip(&joined.players) {
+                        *ret += end.rewards.get(joined.team)[p.index()];
+                    }
+                    return Ok(Played { end, returns });
+                }
                 Push::Error(e) => {
                     tracing::warn!(error = %e, "action rejected");
                     continue;
@@ -269,6 +287,9 @@ impl Client {
                     "{} observations for {n} players",
                     obs.observations.len()
                 )));
+            }
+            for (ret, o) in returns.iter_mut().zip(&obs.observations) {
+                *ret += o.reward;
             }
             if policies.len() == n {
                 for ((p, o), a) in policies

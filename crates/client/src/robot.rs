@@ -78,6 +78,9 @@ pub struct TeamRun {
 pub struct ConnectionResult {
     pub players: Vec<Player>,
     pub end: MatchEnd,
+    /// Each player's return (sum of its rewards over the match), in the
+    /// order of `players`.
+    pub returns: Vec<f32>,
 }
 
 /// Runs the players until the match ends. Each connection's result, in the
@@ -157,6 +160,10 @@ pub async fn play_connection(
                 .collect::<Result<_, _>>()?
         }
     };
-    let end = client.play(&joined, &mut policies).await?;
-    Ok(ConnectionResult { players, end })
+    let played = client.play(&joined, &mut policies).await?;
+    Ok(ConnectionResult {
+        players,
+        end: played.end,
+        returns: played.returns,
+    })
 }

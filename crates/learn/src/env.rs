@@ -404,12 +404,14 @@ impl Slot {
             }
         }
         self.m.step(&joint);
-        let r = self.m.rewards(self.team);
-        for (k, &p) in env.learners.iter().enumerate() {
-            rewards[k] = r[p];
-            self.returns[k] += r[p];
-        }
         self.observe_all();
+        // Each observation carries its robot's reward for the tick
+        // (`Match::reward`, what the server sends too).
+        for (k, &p) in env.learners.iter().enumerate() {
+            let r = self.obs[own + p].reward;
+            rewards[k] = r;
+            self.returns[k] += r;
+        }
         self.m.is_finished()
     }
 

@@ -186,6 +186,7 @@ mod tests {
             },
             control: [false, false, true, false],
             opponent_control: false,
+            reward: 0.0,
         };
         let mut v = [0.0; OBS_DIM];
         scale.encode(&obs, &mut v);

@@ -21,7 +21,7 @@ pub const PROTOCOL_NAME: &str = "naosoccer";
 
 /// This build's protocol version. Peers must agree on `major`; a higher
 /// `minor` only adds optional fields and message types.
-pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 0 };
+pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 1 };
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Version {
@@ -438,6 +438,10 @@ pub struct MatchEnd {
     pub stats: MatchStats,
     /// Ticks on which a joined robot had no action in time (it stayed).
     pub misses: PerTeam<[u64; PLAYERS_PER_TEAM]>,
+    /// Each robot's reward for the last tick played, which no observation
+    /// follows (as `Observation::reward`). Protocol 1.1; read as 0 from 1.0.
+    #[serde(default)]
+    pub rewards: PerTeam<[f32; PLAYERS_PER_TEAM]>,
     /// The referee's hash of the final state, 16 hex digits: equal for equal
     /// matches on one build (a string because JSON readers lose u64 precision).
     pub state_hash: String,
@@ -592,6 +596,7 @@ mod tests {
             },
             control: [false, true, false, false],
             opponent_control: false,
+            reward: 0.0,
         }
     }
 

@@ -218,6 +218,11 @@ pub struct Observation {
     pub control: [bool; PLAYERS_PER_TEAM],
     /// Whether an opponent controls the ball.
     pub opponent_control: bool,
+    /// This robot's reward for the tick that led to this observation (the
+    /// match configuration's `[reward]`, the learning crate's MDP); 0 on the
+    /// first tick. Protocol 1.1; absent from 1.0 peers, read as 0.
+    #[serde(default)]
+    pub reward: f32,
 }
 
 impl Observation {

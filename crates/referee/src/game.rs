@@ -232,6 +232,7 @@ impl Match {
             controller: self.controller,
         };
         observe::fill(self.sim.snapshot(), &ctx, team, player, out);
+        out.reward = self.reward(team, player);
     }
 
     /// Control ticks played so far.
@@ -332,8 +333,20 @@ impl Match {
 
     /// Per-robot reward of the last tick for `team` (learn's MDP):
     /// `s = r_goal + r_close + r_control + r_progress`, returned as `sign(s) * ln(1 + |s|)`
-    /// (DESIGN.md explains why not the paper's `-log(s)`).
+    /// (DESIGN.md explains why not the paper's `-log(s)`). All 0 before the
+    /// first tick.
     pub fn rewards(&self, team: Team) -> [f32; PLAYERS_PER_TEAM] {
+        let shared = self.shared_reward(team);
+        std::array::from_fn(|p| self.player_reward(team, p, shared))
+    }
+
+    /// One robot's entry of [`Match::rewards`].
+    pub fn reward(&self, team: Team, player: usize) -> f32 {
+        self.player_reward(team, player, self.shared_reward(team))
+    }
+
+    /// The terms every robot of `team` shares: goal, opponent control, progress.
+    fn shared_reward(&self, team: Team) -> [f32; 3] {
         let w = &self.cfg.reward;
         let goal = match self.last_goal {
             Some(t) if t == team => w.goal,
@@ -348,22 +361,30 @@ impl Match {
             Team::Blue => self.ball_dx,
             Team::Red => -self.ball_dx,
         };
-        let progress = w.progress * toward;
+        [goal, opponent, w.progress * toward]
+    }
+
+    fn player_reward(&self, team: Team, player: usize, shared: [f32; 3]) -> f32 {
+        let Some(robot) = RobotId::new(team, player) else {
+            return 0.0;
+        };
+        if self.tick == 0 {
+            return 0.0;
+        }
+        let w = &self.cfg.reward;
         let snap = self.sim.snapshot();
-        std::array::from_fn(|p| {
-            let Some(robot) = RobotId::new(team, p) else {
-                return 0.0;
-            };
-            let r = &snap.robots[robot.index()];
-            let d = (snap.ball.pos[0] - r.pos[0]).hypot(snap.ball.pos[1] - r.pos[1]);
-            let close = w.close * (-d / w.close_scale).exp();
-            let control = if self.controller == Some(robot) {
-                w.control
-            } else {
-                0.0
-            };
-            log_compress(goal + close + control + opponent + progress)
-        })
+        let r = &snap.robots[robot.index()];
+        let d = (snap.ball.pos[0] - r.pos[0]).hypot(snap.ball.pos[1] - r.pos[1]);
+        let close = w.close * (-d / w.close_scale).exp();
+        let control = if self.controller == Some(robot) {
+            w.control
+        } else {
+            0.0
+        };
+        let [goal, opponent, progress] = shared;
+        // The order of the sum is part of the reward's bits (and of every
+        // training run's): keep it.
+        log_compress(goal + close + control + opponent + progress)
     }
 }
 

@@ -79,5 +79,6 @@ pub fn blank_observation() -> Observation {
         ball: BallObs::default(),
         control: [false; PLAYERS_PER_TEAM],
         opponent_control: false,
+        reward: 0.0,
     }
 }

@@ -2,7 +2,7 @@
 
 use std::f32::consts::PI;
 
-use naosoccer_proto::{Action, Event, RobotId, Team, ROBOTS};
+use naosoccer_proto::{Action, Event, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 
 const STAY: [Action; ROBOTS] = [Action::Stay; ROBOTS];
@@ -435,9 +435,25 @@ fn rewards_share_the_goal_and_favour_the_controller() {
     let red = m.rewards(Team::Red);
     assert!(blue.iter().all(|r| *r > 2.0), "{blue:?}");
     assert!(red.iter().all(|r| *r < -2.0), "{red:?}");
+    // Each observation carries its robot's entry (what the server sends).
+    for team in [Team::Blue, Team::Red] {
+        for p in 0..PLAYERS_PER_TEAM {
+            assert_eq!(m.observe(team, p).reward, m.rewards(team)[p]);
+        }
+    }
     // The next tick without a goal: small rewards again.
     m.step(&STAY);
     assert!(m.rewards(Team::Blue).iter().all(|r| r.abs() < 1.0));
+}
+
+/// No tick has been played at kick-off, so nothing has been earned yet.
+#[test]
+fn rewards_are_zero_before_the_first_tick() {
+    let m = new_match(12);
+    for team in [Team::Blue, Team::Red] {
+        assert_eq!(m.rewards(team), [0.0; PLAYERS_PER_TEAM]);
+        assert!((0..PLAYERS_PER_TEAM).all(|p| m.observe(team, p).reward == 0.0));
+    }
 }
 
 /// `reward.progress` pays each team for the metres the ball moved toward the

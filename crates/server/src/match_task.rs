@@ -202,6 +202,10 @@ impl MatchTask {
             score: Score { blue, red },
             stats: self.game.stats(),
             misses: self.misses_per_team(),
+            rewards: PerTeam {
+                blue: self.game.rewards(Team::Blue),
+                red: self.game.rewards(Team::Red),
+            },
             state_hash: format!("{:016x}", self.game.state_hash()),
         };
         if reason == EndReason::Internal {

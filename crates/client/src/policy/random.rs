@@ -49,6 +49,7 @@ mod tests {
             ball: Default::default(),
             control: Default::default(),
             opponent_control: false,
+            reward: 0.0,
         }
     }
 

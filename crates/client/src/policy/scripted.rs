@@ -443,6 +443,7 @@ mod tests {
             },
             control: [false; PLAYERS_PER_TEAM],
             opponent_control: false,
+            reward: 0.0,
         }
     }
 
