@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use crate::dqn::{Dqn, DqnConfig};
 use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
 use crate::obs::{ObsScale, OBS_DIM, OBS_VERSION};
-use crate::policy::{save_stores, LearnedPolicy};
+use crate::policy::{save_stores, ActMode, LearnedPolicy};
 use crate::ppo::{Ppo, PpoConfig, Rollout};
 use crate::LearnError;
 
@@ -321,10 +321,22 @@ fn opponent_for(cfg: &TrainConfig) -> Result<Opponent, LearnError> {
             name.parse::<PolicyKind>()
                 .map_err(|e| LearnError::Config(e.to_string()))?,
         ),
-        OpponentSpec::Frozen(spec) => Opponent::Net(Box::new(LearnedPolicy::load(spec)?)),
-        // The first snapshot is the untrained network, as in self-play from scratch.
+        OpponentSpec::Frozen(spec) => {
+            let mut p = LearnedPolicy::load(spec)?;
+            p.set_match_seed(cfg.seed);
+            Opponent::Net(Box::new(p))
+        }
+        // The first snapshot is the untrained network, as in self-play from
+        // scratch. It plays as the learner's team would (`ppo:` samples,
+        // `dqn:` is greedy), with draws seeded by the run's seed.
         OpponentSpec::SelfPlay { .. } => {
-            Opponent::Net(Box::new(LearnedPolicy::untrained(cfg, "self-play".into())))
+            let mut p = LearnedPolicy::untrained(cfg, "self-play".into());
+            p.set_mode(match cfg.algo {
+                Algo::Ppo => ActMode::Sample,
+                Algo::Dqn => ActMode::Greedy,
+            });
+            p.set_match_seed(cfg.seed);
+            Opponent::Net(Box::new(p))
         }
     })
 }

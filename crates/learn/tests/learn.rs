@@ -296,3 +296,41 @@ fn sampled_actions_do_not_depend_on_batching() {
         "an untrained sampler uses several actions"
     );
 }
+
+/// Training against self-play snapshots and against a frozen trained team
+/// (the sampling `ppo:` and greedy `dqn:` specs) runs, and repeats exactly
+/// with the same seed: the opponents' draws are seeded by the run.
+#[test]
+fn self_play_and_frozen_opponents_train_repeatably() {
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    for algo in [Algo::Ppo, Algo::Dqn] {
+        let run = |opponent: OpponentSpec, seed: u64, name: &str| {
+            let mut cfg = tiny_config(algo, seed);
+            cfg.learners = vec![0, 1, 2, 3];
+            cfg.opponent = opponent;
+            cfg.steps = 3 * 32 * 8 * 4;
+            cfg.ppo.rollout = 32;
+            cfg.ppo.epochs = 2;
+            cfg.dqn.warmup = 64;
+            cfg.dqn.batch = 32;
+            cfg.log_every = 32;
+            let dir = out_dir(&format!("{name}_{algo}"));
+            train(&cfg, &dir, &mut |_| {}).unwrap();
+            let metrics = std::fs::read_to_string(dir.join("metrics.csv")).unwrap();
+            (dir, metrics)
+        };
+        // Snapshots every 256 transitions: three of them in the run.
+        let self_play = OpponentSpec::SelfPlay { every: 256 };
+        let (dir, a) = run(self_play.clone(), 21, "selfplay_a");
+        let (_, b) = run(self_play, 21, "selfplay_b");
+        assert_eq!(a, b, "{algo}: self-play repeats");
+        assert!(a.lines().count() >= 4, "{algo}:\n{a}");
+
+        let frozen = OpponentSpec::Frozen(format!("{algo}:{}", dir.display()));
+        let (_, c) = run(frozen.clone(), 22, "frozen_a");
+        let (_, d) = run(frozen, 22, "frozen_b");
+        assert_eq!(c, d, "{algo}: a frozen opponent repeats");
+        assert_ne!(a, c, "{algo}: another opponent and seed, other metrics");
+    }
+}
