@@ -136,14 +136,26 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// Figure size: two charts side by side, the legend in a strip below them
+/// (never over a curve).
+const WIDTH: u32 = 1400;
+const CHART_HEIGHT: u32 = 560;
+const LEGEND_COLUMNS: usize = 3;
+const LEGEND_ROW: i32 = 24;
+
 fn draw(curves: &[Curves], out: &Path) -> Result<(), Box<dyn std::error::Error>> {
-    let root = BitMapBackend::new(out, (1400, 560)).into_drawing_area();
+    let rows = curves.len().div_ceil(LEGEND_COLUMNS) as i32;
+    // The runs' rows, then one line explaining the per-robot widths.
+    let legend_height = (16 + (rows + 1) * LEGEND_ROW) as u32;
+    let root = BitMapBackend::new(out, (WIDTH, CHART_HEIGHT + legend_height)).into_drawing_area();
     root.fill(&WHITE)?;
-    let (left, right) = root.split_horizontally(700);
+    let (charts, legend) = root.split_vertically(CHART_HEIGHT);
+    let (left, right) = charts.split_horizontally(WIDTH / 2);
     let xmax = curves
         .iter()
         .flat_map(|c| c.timeslot.iter().copied())
         .fold(1.0, f64::max);
+    let whole = |x: &f64| format!("{x:.0}");
 
     let (lo, hi) = range(curves.iter().flat_map(|c| c.team.iter().copied()));
     let mut chart = ChartBuilder::on(&left)
@@ -156,24 +168,15 @@ fn draw(curves: &[Curves], out: &Path) -> Result<(), Box<dyn std::error::Error>>
         .configure_mesh()
         .x_desc("timeslot (control ticks per match)")
         .y_desc("average reward per robot and tick")
+        .x_label_formatter(&whole)
         .draw()?;
     for (i, c) in curves.iter().enumerate() {
         let colour = COLOURS[i % COLOURS.len()];
-        chart
-            .draw_series(LineSeries::new(
-                c.timeslot.iter().copied().zip(c.team.iter().copied()),
-                colour.stroke_width(2),
-            ))?
-            .label(c.label.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-            });
+        chart.draw_series(LineSeries::new(
+            c.timeslot.iter().copied().zip(c.team.iter().copied()),
+            colour.stroke_width(2),
+        ))?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
 
     let (lo, hi) = range(
         curves
@@ -190,26 +193,61 @@ fn draw(curves: &[Curves], out: &Path) -> Result<(), Box<dyn std::error::Error>>
         .configure_mesh()
         .x_desc("timeslot (control ticks per match)")
         .y_desc("average reward per tick")
+        .x_label_formatter(&whole)
         .draw()?;
     for (i, c) in curves.iter().enumerate() {
         let colour = COLOURS[i % COLOURS.len()];
-        for (k, (player, r)) in c.robots.iter().enumerate() {
-            // Robots of one run share its colour; the line width tells them apart.
-            let style = colour.mix(1.0 - 0.18 * k as f64).stroke_width(1 + k as u32);
-            chart
-                .draw_series(LineSeries::new(
-                    c.timeslot.iter().copied().zip(r.iter().copied()),
-                    style,
-                ))?
-                .label(format!("{} robot {player}", c.label))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+        for (k, (_, r)) in c.robots.iter().enumerate() {
+            chart.draw_series(LineSeries::new(
+                c.timeslot.iter().copied().zip(r.iter().copied()),
+                robot_style(colour, k),
+            ))?;
         }
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
+
+    // The legend: one entry per run (its colour in both charts).
+    let font = ("sans-serif", 16).into_font();
+    let column = (WIDTH as usize / LEGEND_COLUMNS) as i32;
+    for (i, c) in curves.iter().enumerate() {
+        let colour = COLOURS[i % COLOURS.len()];
+        let x = 24 + (i % LEGEND_COLUMNS) as i32 * column;
+        let y = 16 + (i / LEGEND_COLUMNS) as i32 * LEGEND_ROW;
+        legend.draw(&PathElement::new(
+            vec![(x, y), (x + 32, y)],
+            colour.stroke_width(3),
+        ))?;
+        legend.draw(&Text::new(c.label.clone(), (x + 40, y - 8), font.clone()))?;
+    }
+    let y = 16 + rows * LEGEND_ROW;
+    let mut x = 24;
+    legend.draw(&Text::new(
+        "Per robot: one line each, in its run's colour, robot",
+        (x, y - 8),
+        font.clone(),
+    ))?;
+    x += 400;
+    let max_robots = curves.iter().map(|c| c.robots.len()).max().unwrap_or(0);
+    for k in 0..max_robots {
+        let player = curves
+            .iter()
+            .find_map(|c| c.robots.get(k).map(|r| r.0))
+            .unwrap_or(k);
+        legend.draw(&PathElement::new(
+            vec![(x, y), (x + 32, y)],
+            robot_style(COLOURS[0], k),
+        ))?;
+        legend.draw(&Text::new(
+            format!("{player}"),
+            (x + 38, y - 8),
+            font.clone(),
+        ))?;
+        x += 70;
+    }
     root.present()?;
     Ok(())
+}
+
+/// Robots of one run share its colour; width and shade tell them apart.
+fn robot_style(colour: RGBColor, k: usize) -> ShapeStyle {
+    colour.mix(1.0 - 0.18 * k as f64).stroke_width(1 + k as u32)
 }
