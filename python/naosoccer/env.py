@@ -349,7 +349,7 @@ def _events(
 ) -> List[Dict[str, Any]]:
     """What changed during the tick, as far as observations show it.
 
-    The server pushes no referee events to clients (protocol 1.0); these are
+    The server pushes no referee events to clients (protocol 1.1); these are
     derived from consecutive observations: goals (score changes), falls and
     get-ups of own and opponent robots, and possession changes.
     """
