@@ -6,7 +6,7 @@ mod support;
 
 use naosoccer_client::robot::{run_team, TeamRun};
 use naosoccer_client::{Client, PolicyKind, Push};
-use naosoccer_proto::msg::{EndReason, ErrorCode, MatchId, Player, PlayerAction};
+use naosoccer_proto::msg::{EndReason, ErrorCode, MatchId, Player, PlayerAction, Score};
 use naosoccer_proto::{Action, Team, PLAYERS_PER_TEAM};
 use support::*;
 
@@ -48,22 +48,10 @@ async fn eight_robot_clients_match_the_in_process_runner() {
     let red = red.await.unwrap().unwrap();
     assert_eq!(blue.len() + red.len(), 8, "one connection per robot");
 
-    let (stats, score, ticks, hash) =
-        in_process(&match_cfg, 42, PolicyKind::Scripted, PolicyKind::Random);
-    for r in blue.iter().chain(&red) {
-        assert_eq!(r.end.reason, EndReason::Finished);
-        assert_eq!(r.end.tick, ticks);
-        assert_eq!(r.end.misses.blue, [0; 4]);
-        assert_eq!(r.end.misses.red, [0; 4]);
-        assert_eq!(r.end.score, score);
-        assert_eq!(r.end.stats, stats, "same semantics through the socket");
-        assert_eq!(r.end.state_hash, hash, "same final state, bit for bit");
-    }
-
-    // Each robot's return from the rewards the server sent equals the sum of
-    // `Match::rewards` over the same match in process, bit for bit.
+    // The same match in process (`naosoccer match`'s runner), summing each
+    // robot's `Match::rewards` as it goes.
     let mut returns = [[0.0f32; PLAYERS_PER_TEAM]; 2];
-    naosoccer::runner::play_match_with(
+    let out = naosoccer::runner::play_match_with(
         &match_cfg,
         42,
         &PolicyKind::Scripted,
@@ -77,6 +65,23 @@ async fn eight_robot_clients_match_the_in_process_runner() {
         },
     )
     .unwrap();
+    let score = Score {
+        blue: out.score.blue,
+        red: out.score.red,
+    };
+    let hash = format!("{:016x}", out.state_hash);
+    for r in blue.iter().chain(&red) {
+        assert_eq!(r.end.reason, EndReason::Finished);
+        assert_eq!(r.end.tick, out.ticks);
+        assert_eq!(r.end.misses.blue, [0; 4]);
+        assert_eq!(r.end.misses.red, [0; 4]);
+        assert_eq!(r.end.score, score);
+        assert_eq!(r.end.stats, out.stats, "same semantics through the socket");
+        assert_eq!(r.end.state_hash, hash, "same final state, bit for bit");
+    }
+
+    // Each robot's return from the rewards the server sent equals its sum of
+    // `Match::rewards` in process, bit for bit.
     for (team, results) in [(Team::Blue, &blue), (Team::Red, &red)] {
         for r in results {
             let p = r.players[0].index();

@@ -174,6 +174,21 @@ fn checkpoints_load_to_identical_outputs() {
     }
 }
 
+/// A run of three 32-tick rollouts (PPO) or as many DQN steps after a
+/// short warm-up, a metrics row per rollout, in `out_dir(name_algo)`: the
+/// run directory and its metrics.csv.
+fn short_run(mut cfg: TrainConfig, name: &str) -> (PathBuf, String) {
+    cfg.steps = 3 * 32 * 8 * cfg.learners.len() as u64;
+    cfg.ppo.rollout = 32;
+    cfg.dqn.warmup = 64;
+    cfg.dqn.batch = 32;
+    cfg.log_every = 32;
+    let dir = out_dir(&format!("{name}_{}", cfg.algo));
+    train(&cfg, &dir, &mut |_| {}).unwrap();
+    let metrics = std::fs::read_to_string(dir.join("metrics.csv")).unwrap();
+    (dir, metrics)
+}
+
 #[test]
 fn same_seed_and_threads_give_identical_metrics() {
     let _torch = torch_lock();
@@ -181,15 +196,8 @@ fn same_seed_and_threads_give_identical_metrics() {
     for algo in [Algo::Ppo, Algo::Dqn] {
         let run = |seed: u64, name: &str| {
             let mut cfg = tiny_config(algo, seed);
-            cfg.steps = 3 * 32 * 8;
-            cfg.ppo.rollout = 32;
             cfg.ppo.epochs = 3;
-            cfg.dqn.warmup = 64;
-            cfg.dqn.batch = 32;
-            cfg.log_every = 32;
-            let dir = out_dir(&format!("{name}_{algo}"));
-            train(&cfg, &dir, &mut |_| {}).unwrap();
-            std::fs::read_to_string(dir.join("metrics.csv")).unwrap()
+            short_run(cfg, name).1
         };
         let a = run(11, "repeat_a");
         let b = run(11, "repeat_b");
@@ -309,16 +317,8 @@ fn self_play_and_frozen_opponents_train_repeatably() {
             let mut cfg = tiny_config(algo, seed);
             cfg.learners = vec![0, 1, 2, 3];
             cfg.opponent = opponent;
-            cfg.steps = 3 * 32 * 8 * 4;
-            cfg.ppo.rollout = 32;
             cfg.ppo.epochs = 2;
-            cfg.dqn.warmup = 64;
-            cfg.dqn.batch = 32;
-            cfg.log_every = 32;
-            let dir = out_dir(&format!("{name}_{algo}"));
-            train(&cfg, &dir, &mut |_| {}).unwrap();
-            let metrics = std::fs::read_to_string(dir.join("metrics.csv")).unwrap();
-            (dir, metrics)
+            short_run(cfg, name)
         };
         // Snapshots every 256 transitions: three of them in the run.
         let self_play = OpponentSpec::SelfPlay { every: 256 };
