@@ -156,6 +156,7 @@ mod tests {
             y,
             heading,
             fallen,
+            busy: false,
         };
         let obs = Observation {
             tick: 7,
@@ -187,6 +188,8 @@ mod tests {
             control: [false, false, true, false],
             opponent_control: false,
             reward: 0.0,
+            half: 1,
+            set_play: None,
         };
         let mut v = [0.0; OBS_DIM];
         scale.encode(&obs, &mut v);

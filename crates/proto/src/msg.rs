@@ -21,7 +21,7 @@ pub const PROTOCOL_NAME: &str = "naosoccer";
 
 /// This build's protocol version. Peers must agree on `major`; a higher
 /// `minor` only adds optional fields and message types.
-pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 1 };
+pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 2 };
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Version {
@@ -581,12 +581,14 @@ mod tests {
                 y: 0.25,
                 heading: 0.1,
                 fallen: false,
+                busy: true,
             }; 4],
             opponents: [RobotObs {
                 x: 1.0,
                 y: -0.3,
                 heading: 3.1,
                 fallen: true,
+                busy: false,
             }; 4],
             ball: BallObs {
                 x: 0.123_456_79,
@@ -597,6 +599,12 @@ mod tests {
             control: [false, true, false, false],
             opponent_control: false,
             reward: 0.0,
+            half: 2,
+            set_play: Some(crate::types::SetPlayObs {
+                kind: crate::types::SetPlayKind::CornerKick,
+                own: false,
+                ticks_left: 120,
+            }),
         }
     }
 

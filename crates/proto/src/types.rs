@@ -178,6 +178,10 @@ pub struct RobotObs {
     pub heading: f32,
     /// Lying on the pitch (waiting to get up).
     pub fallen: bool,
+    /// In a kick (wind-up or recovery): the robot finishes it before any new
+    /// action takes effect. Protocol 1.2; absent from older peers, read as false.
+    #[serde(default)]
+    pub busy: bool,
 }
 
 /// The ball as a player sees it, in the observing team's frame.
@@ -223,6 +227,66 @@ pub struct Observation {
     /// first tick. Protocol 1.1; absent from 1.0 peers, read as 0.
     #[serde(default)]
     pub reward: f32,
+    /// The half being played, 1 or 2. Protocol 1.2; absent from older peers,
+    /// read as 0.
+    #[serde(default)]
+    pub half: u8,
+    /// The set play in progress, if any: while it lasts the team that does
+    /// not take it must keep its distance from the ball. Protocol 1.2.
+    #[serde(default)]
+    pub set_play: Option<SetPlayObs>,
+}
+
+/// The SPL restarts. Kick-off: from the centre spot, at the start of each
+/// half and after a goal. Kick-in: the ball left over a touch line. Goal
+/// kick: over a goal line (not a goal), last touched by the attackers.
+/// Corner kick: over a goal line, last touched by the defenders.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SetPlayKind {
+    KickOff,
+    KickIn,
+    GoalKick,
+    CornerKick,
+}
+
+impl SetPlayKind {
+    pub const ALL: [SetPlayKind; 4] = [
+        SetPlayKind::KickOff,
+        SetPlayKind::KickIn,
+        SetPlayKind::GoalKick,
+        SetPlayKind::CornerKick,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SetPlayKind::KickOff => "kick_off",
+            SetPlayKind::KickIn => "kick_in",
+            SetPlayKind::GoalKick => "goal_kick",
+            SetPlayKind::CornerKick => "corner_kick",
+        }
+    }
+
+    /// Index in [`SetPlayKind::ALL`].
+    pub fn index(self) -> usize {
+        match self {
+            SetPlayKind::KickOff => 0,
+            SetPlayKind::KickIn => 1,
+            SetPlayKind::GoalKick => 2,
+            SetPlayKind::CornerKick => 3,
+        }
+    }
+}
+
+/// A set play as a player sees it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SetPlayObs {
+    pub kind: SetPlayKind,
+    /// Whether the observing team takes it.
+    pub own: bool,
+    /// Control ticks until the other team may approach the ball anyway (the
+    /// set play also ends as soon as the ball is played).
+    pub ticks_left: u32,
 }
 
 impl Observation {
@@ -254,6 +318,10 @@ pub enum Event {
         tick: u64,
         from: RobotId,
         to: RobotId,
+        /// How far the ball travelled from the kick to the reception, metres
+        /// (protocol 1.2; read as 0 from older peers).
+        #[serde(default)]
+        distance: f32,
     },
     Fall {
         tick: u64,
@@ -281,6 +349,20 @@ pub enum Event {
         tick: u64,
         team: Team,
     },
+    /// A set play was awarded to `team` with the ball placed at (x, y)
+    /// (kick-offs have their own event). Protocol 1.2.
+    SetPlay {
+        tick: u64,
+        kind: SetPlayKind,
+        team: Team,
+        x: f32,
+        y: f32,
+    },
+    /// The first half is over; the second starts with a kick-off by the team
+    /// that did not kick off the first. Protocol 1.2.
+    HalfTime {
+        tick: u64,
+    },
     /// The clock ran out.
     End {
         tick: u64,
@@ -298,6 +380,8 @@ impl Event {
             | Event::BallOut { tick, .. }
             | Event::RobotOut { tick, .. }
             | Event::KickOff { tick, .. }
+            | Event::SetPlay { tick, .. }
+            | Event::HalfTime { tick }
             | Event::End { tick } => *tick,
         }
     }
@@ -315,6 +399,13 @@ pub struct TeamStats {
     pub shots: u32,
     pub falls: u32,
     pub out_of_bounds: u32,
+    /// Set plays awarded to this team (protocol 1.2; 0 from older peers).
+    #[serde(default)]
+    pub kick_ins: u32,
+    #[serde(default)]
+    pub goal_kicks: u32,
+    #[serde(default)]
+    pub corner_kicks: u32,
 }
 
 /// Both teams' statistics.

@@ -96,6 +96,17 @@ impl Match {
     /// players 0..=3, then red 0..=3) and returns the tick's events. A robot
     /// lying on the pitch ignores its action. After the end, does nothing.
     pub fn step(&mut self, actions: &[Action; ROBOTS]) -> &[Event] {
+        self.step_observed(actions, |_| {})
+    }
+
+    /// [`Match::step`], calling `after_physics` with the sim after each of
+    /// the tick's physics steps (before the rules run): for tests and
+    /// audits that check what happens between two control ticks.
+    pub fn step_observed(
+        &mut self,
+        actions: &[Action; ROBOTS],
+        mut after_physics: impl FnMut(&Sim),
+    ) -> &[Event] {
         self.outcome.clear();
         self.last_goal = None;
         if self.finished {
@@ -119,6 +130,7 @@ impl Match {
         let ball_x = self.sim.snapshot().ball.pos[0];
         for _ in 0..self.steps_per_tick {
             self.sim.step();
+            after_physics(&self.sim);
             // Kicks are reported per physics step; gather the tick's.
             for k in &self.sim.snapshot().kicks {
                 if let Some(robot) = RobotId::from_index(k.robot) {

@@ -40,6 +40,7 @@ pub(crate) fn fill(
             y: sx * r.pos[1],
             heading: wrap_angle(r.heading + rot),
             fallen: ctx.down[i],
+            busy: r.kicking && !ctx.down[i],
         }
     };
     let own_base = team.index() * PLAYERS_PER_TEAM;
@@ -80,5 +81,7 @@ pub fn blank_observation() -> Observation {
         control: [false; PLAYERS_PER_TEAM],
         opponent_control: false,
         reward: 0.0,
+        half: 1,
+        set_play: None,
     }
 }

@@ -415,6 +415,7 @@ mod tests {
             y: 2.0,
             heading: 0.0,
             fallen: false,
+            busy: false,
         }; PLAYERS_PER_TEAM];
         // Teammates far away so `me` is the engager.
         for (i, r) in own.iter_mut().enumerate() {
@@ -434,6 +435,7 @@ mod tests {
                 y: -2.0,
                 heading: std::f32::consts::PI,
                 fallen: false,
+                busy: false,
             }; PLAYERS_PER_TEAM],
             ball: BallObs {
                 x: ball[0],
@@ -444,6 +446,8 @@ mod tests {
             control: [false; PLAYERS_PER_TEAM],
             opponent_control: false,
             reward: 0.0,
+            half: 1,
+            set_play: None,
         }
     }
 
@@ -453,6 +457,7 @@ mod tests {
             y,
             heading,
             fallen: false,
+            busy: false,
         }
     }
 

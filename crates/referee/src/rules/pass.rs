@@ -49,7 +49,12 @@ impl PassRule {
         }
         if let Some(from) = self.holder {
             if self.kicked && from.team() == to.team() {
-                out.events.push(Event::Pass { tick, from, to });
+                out.events.push(Event::Pass {
+                    tick,
+                    from,
+                    to,
+                    distance: 0.0,
+                });
             }
         }
         self.holder = Some(to);
@@ -90,7 +95,8 @@ mod tests {
             vec![Event::Pass {
                 tick: 5,
                 from: a,
-                to: b
+                to: b,
+                distance: 0.0,
             }]
         );
     }
