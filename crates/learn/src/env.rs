@@ -35,10 +35,12 @@ impl Opponent {
     }
 }
 
-/// Picks actions for many robots from their observation vectors at once.
+/// Picks actions for whole teams of many matches at once.
 pub trait BatchActor: Send {
-    /// `obs` holds `out.len()` rows of `OBS_DIM`.
-    fn act_rows(&mut self, obs: &[f32], out: &mut [usize]);
+    /// `teams[i]` is one match's team: the match seed (which keys sampling
+    /// and per-robot decision state) and its robots' observations in player
+    /// order. `out` gets one action index per observation, in order.
+    fn act_teams(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]);
 }
 
 /// What one finished episode (a whole match) showed.
@@ -90,7 +92,6 @@ pub struct VecEnv {
     feats: Vec<f32>,
     rewards: Vec<f32>,
     dones: Vec<bool>,
-    opp_feats: Vec<f32>,
     opp_actions: Vec<usize>,
     ticks: u64,
 }
@@ -152,7 +153,6 @@ impl VecEnv {
             feats: vec![0.0; env.matches * l * OBS_DIM],
             rewards: vec![0.0; env.matches * l],
             dones: vec![false; env.matches * l],
-            opp_feats: Vec::new(),
             opp_actions: Vec::new(),
             env,
             scale,
@@ -204,6 +204,24 @@ impl VecEnv {
         &self.dones
     }
 
+    /// Encodes observations with `scale` from now on (e.g. an older layout
+    /// version); re-encodes the current ones.
+    pub fn set_obs_scale(&mut self, scale: ObsScale) {
+        self.scale = scale;
+        let l = self.env.learners.len();
+        for (slot, f) in self.slots.iter().zip(self.feats.chunks_mut(l * OBS_DIM)) {
+            slot.encode_learners(&self.env.learners, &self.scale, f);
+        }
+    }
+
+    /// The observation row `row` was encoded from (the learning robot's
+    /// last observation; after an episode's end, the next episode's first).
+    pub fn learner_observation(&self, row: usize) -> &Observation {
+        let l = self.env.learners.len();
+        let slot = &self.slots[row / l];
+        &slot.obs[slot.team.index() * PLAYERS_PER_TEAM + self.env.learners[row % l]]
+    }
+
     /// Replaces the opponent (self-play: a newer snapshot).
     pub fn set_opponent(&mut self, opponent: Opponent) {
         let kind = opponent.builtin_kind();
@@ -221,20 +239,16 @@ impl VecEnv {
         assert_eq!(actions.len(), self.rows(), "one action per learning robot");
         let net_opponent = if let Opponent::Net(actor) = &mut self.opponent {
             let n = self.env.matches * PLAYERS_PER_TEAM;
-            self.opp_feats.resize(n * OBS_DIM, 0.0);
             self.opp_actions.resize(n, 0);
-            for (slot, f) in self
+            let teams: Vec<(u64, &[Observation])> = self
                 .slots
                 .iter()
-                .zip(self.opp_feats.chunks_mut(PLAYERS_PER_TEAM * OBS_DIM))
-            {
-                let base = slot.team.other().index() * PLAYERS_PER_TEAM;
-                for p in 0..PLAYERS_PER_TEAM {
-                    self.scale
-                        .encode(&slot.obs[base + p], &mut f[p * OBS_DIM..(p + 1) * OBS_DIM]);
-                }
-            }
-            actor.act_rows(&self.opp_feats, &mut self.opp_actions);
+                .map(|slot| {
+                    let base = slot.team.other().index() * PLAYERS_PER_TEAM;
+                    (slot.m.seed(), &slot.obs[base..base + PLAYERS_PER_TEAM])
+                })
+                .collect();
+            actor.act_teams(&teams, &mut self.opp_actions);
             true
         } else {
             false

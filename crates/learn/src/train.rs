@@ -22,9 +22,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::dqn::{Dqn, DqnConfig};
 use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
-use crate::obs::{ObsScale, OBS_DIM, OBS_VERSION};
-use crate::policy::{save_stores, ActMode, LearnedPolicy};
-use crate::ppo::{Ppo, PpoConfig, Rollout};
+use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
+use crate::policy::{save_stores, ActMode, Hold, LearnedPolicy};
+use crate::ppo::{Ppo, PpoConfig, Rollout, Transitions};
 use crate::LearnError;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -327,32 +327,54 @@ fn opponent_for(cfg: &TrainConfig) -> Result<Opponent, LearnError> {
             Opponent::Net(Box::new(p))
         }
         // The first snapshot is the untrained network, as in self-play from
-        // scratch. It plays as the learner's team would (`ppo:` samples,
-        // `dqn:` is greedy), with draws seeded by the run's seed.
-        OpponentSpec::SelfPlay { .. } => {
-            let mut p = LearnedPolicy::untrained(cfg, "self-play".into());
-            p.set_mode(match cfg.algo {
-                Algo::Ppo => ActMode::Sample,
-                Algo::Dqn => ActMode::Greedy,
-            });
-            p.set_match_seed(cfg.seed);
-            Opponent::Net(Box::new(p))
-        }
+        // scratch.
+        OpponentSpec::SelfPlay { .. } => Opponent::Net(Box::new(self_play_snapshot(cfg, None)?)),
     })
 }
 
+/// A self-play opponent: the run's networks (fresh when `weights` is `None`,
+/// else a copy of the live training networks). It plays as the learner's
+/// team would (`ppo:` samples, `dqn:` is greedy), its draws keyed by each
+/// match's seed, and under the decision-level MDP it holds its decisions as
+/// a loaded team does. Every snapshot, the first and each refresh, is built
+/// here (issue 13, cause 1: refreshed snapshots used to play greedily).
+pub fn self_play_snapshot(
+    cfg: &TrainConfig,
+    weights: Option<&[&tch::nn::VarStore]>,
+) -> Result<LearnedPolicy, LearnError> {
+    let mut p = LearnedPolicy::untrained(cfg, "self-play".into());
+    if let Some(w) = weights {
+        p.copy_from(w)?;
+    }
+    p.set_mode(match cfg.algo {
+        Algo::Ppo => ActMode::Sample,
+        Algo::Dqn => ActMode::Greedy,
+    });
+    p.set_match_seed(cfg.seed);
+    Ok(p)
+}
+
 fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
-    if cfg.obs_version != OBS_VERSION {
+    let supported = match cfg.algo {
+        Algo::Ppo => layout_dim(cfg.obs_version).is_some(),
+        Algo::Dqn => cfg.obs_version == OBS_VERSION,
+    };
+    if !supported {
         return Err(LearnError::Config(format!(
-            "observation layout v{} requested, this build has v{OBS_VERSION}",
-            cfg.obs_version
+            "{} cannot train on observation layout v{} (this build: v{OBS_VERSION})",
+            cfg.algo, cfg.obs_version
         )));
+    }
+    if cfg.ppo.decision.is_some() && cfg.obs_version < 2 {
+        return Err(LearnError::Config(
+            "the decision-level MDP needs observation layout v2 (busy flags, kick reach)".into(),
+        ));
     }
     let teammates = cfg
         .teammates
         .parse::<PolicyKind>()
         .map_err(|e| LearnError::Config(e.to_string()))?;
-    VecEnv::new(
+    let mut env = VecEnv::new(
         &cfg.match_config,
         EnvConfig {
             matches: cfg.matches,
@@ -362,7 +384,16 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             seed: cfg.seed,
         },
         opponent_for(cfg)?,
-    )
+    )?;
+    env.set_obs_scale(run_scale(cfg));
+    Ok(env)
+}
+
+/// The observation encoding of a run: its scale under its layout version.
+pub fn run_scale(cfg: &TrainConfig) -> ObsScale {
+    let mut s = cfg.obs_scale;
+    s.version = cfg.obs_version;
+    s
 }
 
 /// Trains as `cfg` says, writing the run directory `out`. `progress` sees
@@ -392,9 +423,12 @@ fn train_ppo(
     out: &Path,
     progress: &mut dyn FnMut(&Progress<'_>),
 ) -> Result<TrainSummary, LearnError> {
+    if cfg.ppo.decision.is_some() {
+        return train_ppo_decisions(cfg, out, progress);
+    }
     let mut env = make_env(cfg)?;
     let mut run = RunDir::create(out, cfg)?;
-    let mut ppo = Ppo::new(cfg.ppo.clone())?;
+    let mut ppo = Ppo::new(cfg.ppo.clone(), &run_scale(cfg), cfg.learners.len())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let rows = env.rows();
     let robots = cfg.learners.len();
@@ -454,8 +488,7 @@ fn train_ppo(
             )?;
         }
         if snapshot_due(cfg, before, transitions) {
-            let mut snap = LearnedPolicy::untrained(cfg, "self-play".into());
-            snap.copy_from(&[&ppo.net.vs])?;
+            let snap = self_play_snapshot(cfg, Some(&[&ppo.net.vs]))?;
             env.set_opponent(Opponent::Net(Box::new(snap)));
         }
     }
@@ -466,6 +499,240 @@ fn train_ppo(
         transitions,
         final_weights,
     })
+}
+
+/// The open transition of one learning robot: from its last decision until
+/// its next (decision-level MDP).
+#[derive(Debug, Clone, Copy, Default)]
+struct Pending {
+    open: bool,
+    action: usize,
+    logp: f32,
+    value: f32,
+    shoot_ok: bool,
+    /// `sum gamma^i r_i` so far, and `gamma^elapsed`.
+    reward: f32,
+    discount: f32,
+    elapsed: u32,
+    /// The closed transition that leads into this one (same robot, same
+    /// episode, same rollout).
+    prev: Option<usize>,
+}
+
+/// The decision-level PPO loop (`team` preset): every tick each learning
+/// robot either decides (free to act, persistence run out: a forward pass,
+/// its open transition closes with the new decision's value) or holds its
+/// action; rewards accumulate into the open transition discounted per tick;
+/// an episode's end closes it with no bootstrap, the rollout's edge with the
+/// critic's value of the edge state.
+fn train_ppo_decisions(
+    cfg: &TrainConfig,
+    out: &Path,
+    progress: &mut dyn FnMut(&Progress<'_>),
+) -> Result<TrainSummary, LearnError> {
+    let decision = cfg
+        .ppo
+        .decision
+        .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
+    let mut env = make_env(cfg)?;
+    let mut run = RunDir::create(out, cfg)?;
+    let scale = run_scale(cfg);
+    let l = cfg.learners.len();
+    let mut ppo = Ppo::new(cfg.ppo.clone(), &scale, l)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let rows = env.rows();
+    let gamma = cfg.ppo.gamma as f32;
+    let cw = ppo.net.critic_dim;
+    let mut tally = Tally::new(l);
+    let mut tr = Transitions::default();
+    let mut holds = vec![Hold::default(); rows];
+    let mut pend = vec![Pending::default(); rows];
+    let mut pend_obs = vec![0.0f32; rows * OBS_DIM];
+    let mut pend_cobs = vec![0.0f32; rows * cw];
+    let mut actions = vec![0usize; rows];
+    // Scratch for the deciding rows of a tick.
+    let (mut dec_rows, mut dec_obs, mut dec_cobs, mut dec_ok) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
+    let mut transitions = 0u64;
+    let mut update = 0u64;
+    let mut out_rows = Vec::new();
+    while transitions < cfg.steps {
+        tr.clear();
+        for _ in 0..cfg.ppo.rollout {
+            dec_rows.clear();
+            dec_obs.clear();
+            dec_cobs.clear();
+            dec_ok.clear();
+            for (r, hold) in holds.iter_mut().enumerate() {
+                let o = env.learner_observation(r);
+                if hold.must_decide(o) {
+                    dec_rows.push(r);
+                    dec_obs.extend_from_slice(&env.observations()[r * OBS_DIM..(r + 1) * OBS_DIM]);
+                    push_critic_row(env.observations(), l, r, scale.dim(), cw, &mut dec_cobs);
+                    dec_ok.push(!cfg.ppo.masks_shoot() || scale.kick.in_reach(o));
+                } else {
+                    actions[r] = hold.held(o);
+                }
+            }
+            let k = dec_rows.len();
+            dec_act.resize(k, 0);
+            dec_logp.resize(k, 0.0);
+            dec_val.resize(k, 0.0);
+            ppo.act_masked(&dec_obs, &dec_ok, &mut rng, &mut dec_act, &mut dec_logp);
+            ppo.critic_values(&dec_cobs, &mut dec_val);
+            for (j, &r) in dec_rows.iter().enumerate() {
+                let prev = close_pending(
+                    &mut tr,
+                    &mut pend[r],
+                    &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
+                    &pend_cobs[r * cw..(r + 1) * cw],
+                    dec_val[j],
+                    false,
+                );
+                pend[r] = Pending {
+                    open: true,
+                    action: dec_act[j],
+                    logp: dec_logp[j],
+                    value: dec_val[j],
+                    shoot_ok: dec_ok[j],
+                    reward: 0.0,
+                    discount: 1.0,
+                    elapsed: 0,
+                    prev,
+                };
+                pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM]
+                    .copy_from_slice(&dec_obs[j * OBS_DIM..(j + 1) * OBS_DIM]);
+                pend_cobs[r * cw..(r + 1) * cw].copy_from_slice(&dec_cobs[j * cw..(j + 1) * cw]);
+                let tick = env.learner_observation(r).tick;
+                holds[r].start(dec_act[j], tick, decision.persist);
+                actions[r] = dec_act[j];
+            }
+            let finished = env.step(&actions)?;
+            for (r, p) in pend.iter_mut().enumerate() {
+                if p.open {
+                    p.reward += p.discount * env.rewards()[r];
+                    p.discount *= gamma;
+                    p.elapsed += 1;
+                }
+                if env.dones()[r] {
+                    close_pending(
+                        &mut tr,
+                        p,
+                        &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
+                        &pend_cobs[r * cw..(r + 1) * cw],
+                        0.0,
+                        true,
+                    );
+                    holds[r].reset();
+                }
+            }
+            tally.add_rewards(env.rewards());
+            tally.episodes.extend(finished);
+        }
+        // The rollout's edge: open transitions end here, bootstrapped with
+        // the critic's value of the state they reached.
+        let mut edge_cobs = Vec::with_capacity(rows * cw);
+        for r in 0..rows {
+            push_critic_row(env.observations(), l, r, scale.dim(), cw, &mut edge_cobs);
+        }
+        let mut edge_val = vec![0.0f32; rows];
+        ppo.critic_values(&edge_cobs, &mut edge_val);
+        for r in 0..rows {
+            close_pending(
+                &mut tr,
+                &mut pend[r],
+                &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
+                &pend_cobs[r * cw..(r + 1) * cw],
+                edge_val[r],
+                false,
+            );
+            pend[r].prev = None;
+        }
+        let before = transitions;
+        transitions += (cfg.ppo.rollout * rows) as u64;
+        let stats = ppo.update_decisions(&tr, before as f64 / cfg.steps.max(1) as f64, &mut rng);
+        update += 1;
+        let row = tally.row(
+            update,
+            env.ticks() / cfg.matches as u64,
+            transitions,
+            (stats.policy_loss, stats.value_loss, stats.entropy),
+        );
+        run.write_row(&row)?;
+        progress(&Progress {
+            row: &row,
+            total_steps: cfg.steps,
+        });
+        out_rows.push(row);
+        if checkpoint_due(before, transitions, cfg.checkpoint_every) {
+            save_stores(
+                &[&ppo.net.vs],
+                &out.join(format!("checkpoints/step-{transitions}.safetensors")),
+            )?;
+        }
+        if snapshot_due(cfg, before, transitions) {
+            let snap = self_play_snapshot(cfg, Some(&[&ppo.net.vs]))?;
+            env.set_opponent(Opponent::Net(Box::new(snap)));
+        }
+    }
+    let final_weights = out.join("final.safetensors");
+    save_stores(&[&ppo.net.vs], &final_weights)?;
+    Ok(TrainSummary {
+        rows: out_rows,
+        transitions,
+        final_weights,
+    })
+}
+
+/// Closes `p` (if open) into `tr` with the value `next_value` after it;
+/// returns the closed transition's index when the robot's stream goes on
+/// from it (not at an episode's end).
+fn close_pending(
+    tr: &mut Transitions,
+    p: &mut Pending,
+    obs: &[f32],
+    cobs: &[f32],
+    next_value: f32,
+    done: bool,
+) -> Option<usize> {
+    if !p.open {
+        return None;
+    }
+    let i = tr.len();
+    tr.obs.extend_from_slice(obs);
+    tr.critic_obs.extend_from_slice(cobs);
+    tr.actions.push(p.action as i64);
+    tr.logp.push(p.logp);
+    tr.shoot_ok.push(p.shoot_ok);
+    tr.values.push(p.value);
+    tr.rewards.push(p.reward);
+    tr.dt.push(p.elapsed.max(1));
+    tr.next_values.push(next_value);
+    tr.dones.push(done);
+    tr.next.push(None);
+    if let Some(j) = p.prev {
+        tr.next[j] = Some(i);
+    }
+    p.open = false;
+    p.prev = None;
+    (!done).then_some(i)
+}
+
+/// Appends row `r`'s critic input: its own observation vector (the layout's
+/// `dim` entries), then, with a centralised critic (`cw` > `dim`), those of
+/// the other learning robots of its match in order.
+fn push_critic_row(feats: &[f32], l: usize, r: usize, dim: usize, cw: usize, out: &mut Vec<f32>) {
+    let row = |i: usize| &feats[i * OBS_DIM..i * OBS_DIM + dim];
+    out.extend_from_slice(row(r));
+    if cw > dim {
+        let base = r / l * l;
+        for k in 0..l {
+            if base + k != r {
+                out.extend_from_slice(row(base + k));
+            }
+        }
+    }
 }
 
 fn train_dqn(
@@ -541,8 +808,7 @@ fn train_dqn(
             )?;
         }
         if snapshot_due(cfg, before, transitions) {
-            let mut snap = LearnedPolicy::untrained(cfg, "self-play".into());
-            snap.copy_from(&stores)?;
+            let snap = self_play_snapshot(cfg, Some(&stores))?;
             env.set_opponent(Opponent::Net(Box::new(snap)));
         }
     }
