@@ -265,11 +265,7 @@ impl LearnedPolicy {
         let mut scale = cfg.obs_scale;
         scale.version = cfg.obs_version;
         let model = match cfg.algo {
-            Algo::Ppo => Model::Ppo(ActorCritic::for_run(
-                &cfg.ppo,
-                &scale,
-                cfg.learners.len(),
-            )),
+            Algo::Ppo => Model::Ppo(ActorCritic::for_run(&cfg.ppo, &scale, cfg.learners.len())),
             Algo::Dqn => {
                 let n = if cfg.dqn.shared {
                     1
@@ -337,11 +333,7 @@ impl LearnedPolicy {
         let mut i = 0;
         for &(seed, obs) in teams {
             for o in obs {
-                let key = (
-                    seed,
-                    o.team.index(),
-                    o.player as usize % PLAYERS_PER_TEAM,
-                );
+                let key = (seed, o.team.index(), o.player as usize % PLAYERS_PER_TEAM);
                 let decides = match self.decision {
                     None => true,
                     Some(_) => {

@@ -769,7 +769,11 @@ impl RunningNorm {
         }
         let n = xs.len() as f64;
         let mean = xs.iter().map(|&x| f64::from(x)).sum::<f64>() / n;
-        let var = xs.iter().map(|&x| (f64::from(x) - mean).powi(2)).sum::<f64>() / n;
+        let var = xs
+            .iter()
+            .map(|&x| (f64::from(x) - mean).powi(2))
+            .sum::<f64>()
+            / n;
         let total = self.count + n;
         let delta = mean - self.mean;
         let m2 = self.var * self.count + var * n + delta * delta * self.count * n / total;
@@ -997,7 +1001,10 @@ mod tests {
         // B's: the episode ended; nothing is bootstrapped past it.
         let a2 = 1.0 - 0.5;
         let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
-        assert!(close(adv[0], a0) && close(adv[1], a1) && close(adv[2], a2), "{adv:?}");
+        assert!(
+            close(adv[0], a0) && close(adv[1], a1) && close(adv[2], a2),
+            "{adv:?}"
+        );
         assert!(close(ret[0], a0 + 1.0) && close(ret[2], 1.0));
         // With one-tick steps, decision GAE is the per-tick GAE.
         let per_tick = Transitions {
@@ -1040,6 +1047,9 @@ mod tests {
                 }
             }
         }
-        assert!(shot_when_allowed > 0, "an untrained policy shoots when it may");
+        assert!(
+            shot_when_allowed > 0,
+            "an untrained policy shoots when it may"
+        );
     }
 }

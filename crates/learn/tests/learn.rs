@@ -355,8 +355,16 @@ fn issue_13_refreshed_self_play_snapshots_sample_like_the_learner() {
     let first = self_play_snapshot(&cfg, None).unwrap();
     let refreshed = self_play_snapshot(&cfg, Some(&[&live.net.vs])).unwrap();
     assert_eq!(first.mode(), ActMode::Sample);
-    assert_eq!(refreshed.mode(), ActMode::Sample, "a refreshed PPO snapshot samples");
-    assert_eq!(refreshed.decision(), cfg.ppo.decision, "and holds its decisions");
+    assert_eq!(
+        refreshed.mode(),
+        ActMode::Sample,
+        "a refreshed PPO snapshot samples"
+    );
+    assert_eq!(
+        refreshed.decision(),
+        cfg.ppo.decision,
+        "and holds its decisions"
+    );
     let rows = probe_rows();
     let x = tch::Tensor::from_slice(&rows).view([16, OBS_DIM as i64]);
     let mut want = vec![0.0f32; 16 * 5];
@@ -364,7 +372,10 @@ fn issue_13_refreshed_self_play_snapshots_sample_like_the_learner() {
     assert_eq!(refreshed.outputs(&rows, 0), want, "the live weights");
 
     let dqn = tiny_config(Algo::Dqn, 13);
-    assert_eq!(self_play_snapshot(&dqn, None).unwrap().mode(), ActMode::Greedy);
+    assert_eq!(
+        self_play_snapshot(&dqn, None).unwrap().mode(),
+        ActMode::Greedy
+    );
 }
 
 /// The decision-level MDP's per-robot state: a free robot decides, holds a
@@ -396,9 +407,15 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
     assert!(!h.must_decide(&at(3, true, false)), "busy: no decision");
     assert_eq!(h.held(&at(3, true, false)), STAY);
     assert!(!h.must_decide(&at(4, false, true)), "lying: no decision");
-    assert!(h.must_decide(&at(5, false, false)), "free again, persistence over");
+    assert!(
+        h.must_decide(&at(5, false, false)),
+        "free again, persistence over"
+    );
     h.start(SHOOT, 5, 3);
-    assert!(h.must_decide(&at(6, false, false)), "a shoot holds one tick");
+    assert!(
+        h.must_decide(&at(6, false, false)),
+        "a shoot holds one tick"
+    );
     h.start(0, 6, 3);
     assert!(h.must_decide(&at(0, false, false)), "a new match");
 }
@@ -452,7 +469,10 @@ fn team_policies_decide_alike_however_they_are_asked() {
         // Another match batched alongside must not disturb this one.
         let other: Vec<_> = (0..4).map(|p| m.observe(Team::Red, p)).collect();
         batched.act_matches(&[(99, &other), (31, &obs)], &mut c);
-        let c: Vec<Action> = c[4..].iter().map(|&i| Action::from_index(i).unwrap()).collect();
+        let c: Vec<Action> = c[4..]
+            .iter()
+            .map(|&i| Action::from_index(i).unwrap())
+            .collect();
         assert_eq!(a, b.to_vec(), "robot policies vs one team policy");
         assert_eq!(a, c, "robot policies vs batched matches");
         for (p, o) in obs.iter().enumerate() {
@@ -482,5 +502,8 @@ fn team_policies_decide_alike_however_they_are_asked() {
         all[..4].copy_from_slice(&a);
         m.step(&all);
     }
-    assert!(changes > 10, "an untrained team changes its mind ({changes})");
+    assert!(
+        changes > 10,
+        "an untrained team changes its mind ({changes})"
+    );
 }
