@@ -25,6 +25,7 @@ use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
 use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
 use crate::policy::{save_stores, ActMode, Hold, LearnedPolicy};
 use crate::ppo::{Ppo, PpoConfig, Rollout, Transitions};
+use crate::schedule::ScheduleRunner;
 use crate::LearnError;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -55,7 +56,7 @@ impl std::str::FromStr for Algo {
 }
 
 /// Who the learner plays against during training.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum OpponentSpec {
     /// A built-in policy by name: `scripted`, `random`, `idle`.
@@ -64,12 +65,23 @@ pub enum OpponentSpec {
     Frozen(String),
     /// The learner's own snapshot, refreshed every `every` transitions.
     SelfPlay { every: u64 },
+    /// A curriculum of opponent mixes with a pool of past snapshots (PPO).
+    Schedule(crate::schedule::Schedule),
 }
 
 impl std::str::FromStr for OpponentSpec {
     type Err = String;
-    /// `scripted` | `random` | `idle` | `ppo:DIR` | `dqn:DIR` | `self-play[:N]`.
+    /// `scripted` | `random` | `idle` | `ppo:DIR` | `dqn:DIR` | `self-play[:N]`
+    /// | `curriculum` | `schedule:STAGES` (see [`crate::schedule`]).
     fn from_str(s: &str) -> Result<Self, String> {
+        if s == "curriculum" {
+            return Ok(OpponentSpec::Schedule(
+                crate::schedule::Schedule::curriculum(),
+            ));
+        }
+        if let Some(rest) = s.strip_prefix("schedule:") {
+            return crate::schedule::Schedule::parse(rest).map(OpponentSpec::Schedule);
+        }
         if let Some(rest) = s.strip_prefix("self-play") {
             let every = match rest.strip_prefix(':') {
                 Some(n) => n
@@ -83,8 +95,9 @@ impl std::str::FromStr for OpponentSpec {
         if s.starts_with("ppo:") || s.starts_with("dqn:") {
             return Ok(OpponentSpec::Frozen(s.to_string()));
         }
-        s.parse::<PolicyKind>()
-            .map_err(|e| format!("{e}; or ppo:DIR, dqn:DIR, self-play[:N]"))?;
+        s.parse::<PolicyKind>().map_err(|e| {
+            format!("{e}; or ppo:DIR, dqn:DIR, self-play[:N], curriculum, schedule:...")
+        })?;
         Ok(OpponentSpec::Builtin(s.to_string()))
     }
 }
@@ -329,6 +342,13 @@ fn opponent_for(cfg: &TrainConfig) -> Result<Opponent, LearnError> {
         // The first snapshot is the untrained network, as in self-play from
         // scratch.
         OpponentSpec::SelfPlay { .. } => Opponent::Net(Box::new(self_play_snapshot(cfg, None)?)),
+        // The schedule's runner sets the opponents once the learner exists.
+        OpponentSpec::Schedule(_) if cfg.algo == Algo::Ppo => Opponent::Builtin(PolicyKind::Idle),
+        OpponentSpec::Schedule(_) => {
+            return Err(LearnError::Config(
+                "opponent schedules are for PPO runs".into(),
+            ))
+        }
     })
 }
 
@@ -430,6 +450,7 @@ fn train_ppo(
     let mut run = RunDir::create(out, cfg)?;
     let mut ppo = Ppo::new(cfg.ppo.clone(), &run_scale(cfg), cfg.learners.len())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let mut sched = start_schedule(cfg, out, &mut env, &ppo)?;
     let rows = env.rows();
     let robots = cfg.learners.len();
     let mut tally = Tally::new(robots);
@@ -491,6 +512,9 @@ fn train_ppo(
             let snap = self_play_snapshot(cfg, Some(&[&ppo.net.vs]))?;
             env.set_opponent(Opponent::Net(Box::new(snap)));
         }
+        if let Some(sc) = sched.as_mut() {
+            sc.advance(cfg, before, transitions, &mut env, &[&ppo.net.vs])?;
+        }
     }
     let final_weights = out.join("final.safetensors");
     save_stores(&[&ppo.net.vs], &final_weights)?;
@@ -499,6 +523,25 @@ fn train_ppo(
         transitions,
         final_weights,
     })
+}
+
+/// The opponent schedule's runner, when the run has one.
+fn start_schedule(
+    cfg: &TrainConfig,
+    out: &Path,
+    env: &mut VecEnv,
+    ppo: &Ppo,
+) -> Result<Option<ScheduleRunner>, LearnError> {
+    match &cfg.opponent {
+        OpponentSpec::Schedule(s) => Ok(Some(ScheduleRunner::start(
+            s,
+            cfg,
+            out,
+            env,
+            &[&ppo.net.vs],
+        )?)),
+        _ => Ok(None),
+    }
 }
 
 /// The open transition of one learning robot: from its last decision until
@@ -540,6 +583,7 @@ fn train_ppo_decisions(
     let l = cfg.learners.len();
     let mut ppo = Ppo::new(cfg.ppo.clone(), &scale, l)?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let mut sched = start_schedule(cfg, out, &mut env, &ppo)?;
     let rows = env.rows();
     let gamma = cfg.ppo.gamma as f32;
     let cw = ppo.net.critic_dim;
@@ -674,6 +718,9 @@ fn train_ppo_decisions(
         if snapshot_due(cfg, before, transitions) {
             let snap = self_play_snapshot(cfg, Some(&[&ppo.net.vs]))?;
             env.set_opponent(Opponent::Net(Box::new(snap)));
+        }
+        if let Some(sc) = sched.as_mut() {
+            sc.advance(cfg, before, transitions, &mut env, &[&ppo.net.vs])?;
         }
     }
     let final_weights = out.join("final.safetensors");
