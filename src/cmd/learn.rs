@@ -64,17 +64,22 @@ final.safetensors. Play the result with `naosoccer eval --blue ppo:DIR` or
 `naosoccer client --policy ppo:DIR`. See docs/LEARNING.md.")]
 pub struct TrainArgs {
     /// Algorithm: dqn (the paper's Algorithm 1) or ppo (Algorithm 2).
+    #[arg(long, required_unless_present = "resume")]
+    algo: Option<Algo>,
+    /// Robot transitions to train for (one learning robot, one control
+    /// tick); default 1000000. With --resume: the run's new total length.
     #[arg(long)]
-    algo: Algo,
-    /// Robot transitions to train for (one learning robot, one control tick).
-    #[arg(long, default_value_t = 1_000_000)]
-    steps: u64,
+    steps: Option<u64>,
+    /// Continue the run in DIR from its latest checkpoint, as if it had not
+    /// stopped (team preset; its config.json decides everything else).
+    #[arg(long, value_name = "DIR", conflicts_with = "out")]
+    resume: Option<PathBuf>,
     /// Seed of the matches, the weights and the sampling.
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Run directory to write (created; existing files are overwritten).
-    #[arg(long)]
-    out: PathBuf,
+    #[arg(long, required_unless_present = "resume")]
+    out: Option<PathBuf>,
     /// PPO hyperparameters: paper (Algorithm 2, PPO-PyTorch defaults),
     /// cleanrl (GAE, advantage normalisation, grad-norm clipping, orthogonal
     /// init) or team (the decision-level MDP with the PPO fixes).
@@ -147,8 +152,9 @@ pub struct TrainArgs {
 pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     tch::set_num_threads(a.torch_threads.max(1));
     let mcfg = match_config(a.config.as_ref(), a.minutes)?;
-    let mut cfg = TrainConfig::new(a.algo, mcfg);
-    cfg.steps = a.steps;
+    let algo = a.algo.unwrap_or(Algo::Ppo);
+    let mut cfg = TrainConfig::new(algo, mcfg);
+    cfg.steps = a.steps.unwrap_or(1_000_000);
     cfg.seed = a.seed;
     cfg.matches = a.matches;
     cfg.threads = a.threads;
@@ -201,7 +207,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     // Matches end together, so most rows have no finished episode: show the
     // latest episodes that did finish.
     let mut last_episodes = "no episode finished yet".to_string();
-    let summary = train(&cfg, &a.out, &mut |p| {
+    let mut show = |p: &naosoccer_learn::train::Progress<'_>| {
         if !p.row.episode_return.is_nan() {
             last_episodes = format!(
                 "last episodes: return {:.2}, goals {:.2}:{:.2} ({} so far)",
@@ -232,14 +238,19 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         } else {
             let _ = writeln!(err, "{line}");
         }
-    })?;
+    };
+    let summary = match (&a.resume, &a.out) {
+        (Some(dir), _) => naosoccer_learn::train::resume(dir, a.steps, &mut show)?,
+        (None, Some(out)) => train(&cfg, out, &mut show)?,
+        (None, None) => anyhow::bail!("--out DIR is needed (or --resume DIR)"),
+    };
     if tty {
         eprintln!();
     }
     let secs = start.elapsed().as_secs_f64();
     println!(
         "trained {} for {} transitions in {:.1} s ({:.0} transitions/s); weights: {}",
-        cfg.algo,
+        algo,
         summary.transitions,
         secs,
         summary.transitions as f64 / secs,

@@ -297,6 +297,33 @@ impl VecEnv {
         Ok(())
     }
 
+    /// Starts every match afresh at episode `episodes[i]` (as if that many
+    /// had finished), the tick counter at `ticks`: where a resumed run picks
+    /// up, at an episode boundary.
+    pub fn restart_at(&mut self, episodes: &[u64], ticks: u64) -> Result<(), LearnError> {
+        if episodes.len() != self.slots.len() {
+            return Err(LearnError::Config(format!(
+                "{} episode numbers for {} matches",
+                episodes.len(),
+                self.slots.len()
+            )));
+        }
+        let l = self.env.learners.len();
+        for (slot, &e) in self.slots.iter_mut().zip(episodes) {
+            slot.episode = e;
+            slot.m = Match::new(&self.cfg, episode_seed(self.env.seed, slot.index, e))?;
+            slot.returns = vec![0.0; l];
+            slot.finished = None;
+            slot.build_policies(&self.env, &self.mix);
+            slot.observe_all();
+        }
+        for (slot, f) in self.slots.iter().zip(self.feats.chunks_mut(l * OBS_DIM)) {
+            slot.encode_learners(&self.env.learners, &self.scale, f);
+        }
+        self.ticks = ticks;
+        Ok(())
+    }
+
     /// Each match's episode number (how many of its episodes finished).
     pub fn episodes(&self) -> Vec<u64> {
         self.slots.iter().map(|s| s.episode).collect()

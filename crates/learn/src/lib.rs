@@ -14,6 +14,7 @@
 //! The reward is the referee's (`Match::rewards`): its weights are part of the
 //! match configuration.
 
+pub mod adam;
 pub mod dqn;
 pub mod env;
 mod error;

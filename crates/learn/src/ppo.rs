@@ -24,6 +24,7 @@ use serde::{Deserialize, Serialize};
 use tch::nn::{self, OptimizerConfig};
 use tch::{Kind, Tensor};
 
+use crate::adam::Adam;
 use crate::nets::{Activation, InitScheme, Mlp};
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
@@ -415,6 +416,10 @@ pub struct Ppo {
     probs: Vec<f32>,
     /// Running statistics of the value targets (`value_norm`).
     pub value_norm: RunningNorm,
+    /// The decision-level updates' optimiser (its state is checkpointed,
+    /// so a run resumes bit for bit); `None` for the per-tick presets, which
+    /// keep tch's Adam.
+    pub adam: Option<Adam>,
 }
 
 impl Ppo {
@@ -434,12 +439,18 @@ impl Ppo {
         .build(&net.vs, cfg.lr_actor)?;
         opt.set_lr_group(0, cfg.lr_actor);
         opt.set_lr_group(1, cfg.lr_critic);
+        let adam = cfg.decision.is_some().then(|| {
+            Adam::new(&net.vs, vec![cfg.lr_actor, cfg.lr_critic], 1e-5, |name| {
+                usize::from(!name.starts_with("actor"))
+            })
+        });
         Ok(Ppo {
             cfg,
             net,
             opt,
             probs: Vec::new(),
             value_norm: RunningNorm::default(),
+            adam,
         })
     }
 
@@ -503,10 +514,13 @@ impl Ppo {
         }
         let cfg = self.cfg.clone();
         let frac = progress.clamp(0.0, 1.0);
+        let Some(mut opt) = self.adam.take() else {
+            return stats;
+        };
         if let Some(end) = cfg.lr_end_fraction {
             let scale = 1.0 - (1.0 - end) * frac;
-            self.opt.set_lr_group(0, cfg.lr_actor * scale);
-            self.opt.set_lr_group(1, cfg.lr_critic * scale);
+            opt.set_lr(0, cfg.lr_actor * scale);
+            opt.set_lr(1, cfg.lr_critic * scale);
         }
         let ent_coef = match cfg.entropy_coef_end {
             Some(end) => cfg.entropy_coef + (end - cfg.entropy_coef) * frac,
@@ -556,12 +570,12 @@ impl Ppo {
                     .square()
                     .mean(Kind::Float);
                 let loss = &pl + cfg.value_coef * &vl - ent_coef * &entropy;
-                self.opt.zero_grad();
+                opt.zero_grad();
                 loss.backward();
                 if let Some(m) = cfg.max_grad_norm {
-                    self.opt.clip_grad_norm(m);
+                    opt.clip_grad_norm(m);
                 }
-                self.opt.step();
+                opt.step();
                 let kl = tch::no_grad(|| {
                     let lr = logp.detach() - &old;
                     (lr.exp() - 1.0 - &lr).mean(Kind::Float)
@@ -584,6 +598,7 @@ impl Ppo {
                 }
             }
         }
+        self.adam = Some(opt);
         if count > 0.0 {
             stats.policy_loss /= count;
             stats.value_loss /= count;

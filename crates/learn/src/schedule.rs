@@ -207,6 +207,45 @@ impl ScheduleRunner {
         self.stage
     }
 
+    /// The runner's state for a checkpoint: its stage and its pool's
+    /// snapshots (transitions, file name in `pool/`).
+    pub fn state(&self) -> (usize, Vec<(u64, String)>) {
+        (
+            self.stage,
+            self.pool
+                .iter()
+                .map(|(t, p)| {
+                    (
+                        *t,
+                        p.file_name()
+                            .map(|n| n.to_string_lossy().into_owned())
+                            .unwrap_or_default(),
+                    )
+                })
+                .collect(),
+        )
+    }
+
+    /// A runner resumed from [`ScheduleRunner::state`]; gives `env` its
+    /// stage's opponents.
+    pub fn resume(
+        sched: &Schedule,
+        cfg: &TrainConfig,
+        run_dir: &Path,
+        env: &mut VecEnv,
+        state: &(usize, Vec<(u64, String)>),
+    ) -> Result<ScheduleRunner, LearnError> {
+        let dir = run_dir.join("pool");
+        let mut r = ScheduleRunner {
+            sched: sched.clone(),
+            stage: state.0,
+            pool: state.1.iter().map(|(t, n)| (*t, dir.join(n))).collect(),
+            dir,
+        };
+        r.apply(cfg, env)?;
+        Ok(r)
+    }
+
     fn snapshot(
         &mut self,
         transitions: u64,

@@ -313,6 +313,33 @@ impl RunDir {
         })
     }
 
+    /// Reopens a run directory to go on from a checkpoint: metrics.csv keeps
+    /// its header and its first `rows` rows (those written up to the
+    /// checkpoint) and grows from there.
+    fn reopen(dir: &Path, rows: u64) -> Result<RunDir, LearnError> {
+        let mpath = dir.join("metrics.csv");
+        let text = std::fs::read_to_string(&mpath).map_err(|e| LearnError::io(&mpath, e))?;
+        let kept: Vec<&str> = text.lines().take(1 + rows as usize).collect();
+        if kept.len() != 1 + rows as usize {
+            return Err(LearnError::Config(format!(
+                "{} has {} rows, the checkpoint expects {rows}",
+                mpath.display(),
+                kept.len().saturating_sub(1)
+            )));
+        }
+        let mut body = kept.join("\n");
+        body.push('\n');
+        std::fs::write(&mpath, body).map_err(|e| LearnError::io(&mpath, e))?;
+        let f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&mpath)
+            .map_err(|e| LearnError::io(&mpath, e))?;
+        Ok(RunDir {
+            dir: dir.to_path_buf(),
+            metrics: std::io::BufWriter::new(f),
+        })
+    }
+
     fn write_row(&mut self, row: &MetricsRow) -> Result<(), LearnError> {
         let p = self.dir.join("metrics.csv");
         writeln!(self.metrics, "{}", row.to_csv()).map_err(|e| LearnError::io(&p, e))?;
@@ -444,7 +471,7 @@ fn train_ppo(
     progress: &mut dyn FnMut(&Progress<'_>),
 ) -> Result<TrainSummary, LearnError> {
     if cfg.ppo.decision.is_some() {
-        return train_ppo_decisions(cfg, out, progress);
+        return train_ppo_decisions(cfg, out, None, progress);
     }
     let mut env = make_env(cfg)?;
     let mut run = RunDir::create(out, cfg)?;
@@ -571,6 +598,7 @@ struct Pending {
 fn train_ppo_decisions(
     cfg: &TrainConfig,
     out: &Path,
+    resume: Option<ResumeState>,
     progress: &mut dyn FnMut(&Progress<'_>),
 ) -> Result<TrainSummary, LearnError> {
     let decision = cfg
@@ -578,16 +606,59 @@ fn train_ppo_decisions(
         .decision
         .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
     let mut env = make_env(cfg)?;
-    let mut run = RunDir::create(out, cfg)?;
     let scale = run_scale(cfg);
     let l = cfg.learners.len();
     let mut ppo = Ppo::new(cfg.ppo.clone(), &scale, l)?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
-    let mut sched = start_schedule(cfg, out, &mut env, &ppo)?;
+    let mut tally = Tally::new(l);
+    let mut transitions = 0u64;
+    let mut update = 0u64;
+    // The self-play snapshot in play (weights file under pool/).
+    let mut self_play: Option<String> = None;
+    let (mut run, mut sched) = match &resume {
+        None => {
+            let run = RunDir::create(out, cfg)?;
+            let sched = start_schedule(cfg, out, &mut env, &ppo)?;
+            if matches!(cfg.opponent, OpponentSpec::SelfPlay { .. }) {
+                let name = "self-play-step-0.safetensors".to_string();
+                set_self_play(cfg, out, &name, Some(&ppo), &mut env)?;
+                self_play = Some(name);
+            }
+            (run, sched)
+        }
+        Some(st) => {
+            let ck = out.join("checkpoints");
+            ppo.net
+                .vs
+                .load(ck.join(format!("step-{}.safetensors", st.transitions)))?;
+            let named = tch::Tensor::read_safetensors(
+                ck.join(format!("step-{}.adam.safetensors", st.transitions)),
+            )?;
+            if let Some(a) = ppo.adam.as_mut() {
+                a.load_state(&named)?;
+            }
+            ppo.value_norm = st.value_norm;
+            rng = st.rng()?;
+            transitions = st.transitions;
+            update = st.update;
+            tally.total_episodes = st.total_episodes;
+            env.restart_at(&st.episodes, st.env_ticks)?;
+            let sched = match (&cfg.opponent, &st.schedule) {
+                (OpponentSpec::Schedule(s), Some(state)) => {
+                    Some(ScheduleRunner::resume(s, cfg, out, &mut env, state)?)
+                }
+                _ => None,
+            };
+            if let Some(name) = &st.self_play {
+                set_self_play(cfg, out, name, None, &mut env)?;
+                self_play = Some(name.clone());
+            }
+            (RunDir::reopen(out, st.update)?, sched)
+        }
+    };
     let rows = env.rows();
     let gamma = cfg.ppo.gamma as f32;
     let cw = ppo.net.critic_dim;
-    let mut tally = Tally::new(l);
     let mut tr = Transitions::default();
     let mut holds = vec![Hold::default(); rows];
     let mut pend = vec![Pending::default(); rows];
@@ -598,12 +669,17 @@ fn train_ppo_decisions(
     let (mut dec_rows, mut dec_obs, mut dec_cobs, mut dec_ok) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
-    let mut transitions = 0u64;
-    let mut update = 0u64;
     let mut out_rows = Vec::new();
+    let mut last_checkpoint = transitions;
     while transitions < cfg.steps {
         tr.clear();
-        for _ in 0..cfg.ppo.rollout {
+        let mut ticks = 0usize;
+        // A rollout also ends with the episodes (all matches have one
+        // length and end together): checkpoints fall on episode
+        // boundaries, where a resumed run can rebuild the matches exactly.
+        let mut boundary = false;
+        while ticks < cfg.ppo.rollout && !boundary {
+            ticks += 1;
             dec_rows.clear();
             dec_obs.clear();
             dec_cobs.clear();
@@ -673,6 +749,7 @@ fn train_ppo_decisions(
             }
             tally.add_rewards(env.rewards());
             tally.episodes.extend(finished);
+            boundary = env.dones().iter().all(|&d| d);
         }
         // The rollout's edge: open transitions end here, bootstrapped with
         // the critic's value of the state they reached.
@@ -694,7 +771,7 @@ fn train_ppo_decisions(
             pend[r].prev = None;
         }
         let before = transitions;
-        transitions += (cfg.ppo.rollout * rows) as u64;
+        transitions += (ticks * rows) as u64;
         let stats = ppo.update_decisions(&tr, before as f64 / cfg.steps.max(1) as f64, &mut rng);
         update += 1;
         let row = tally.row(
@@ -709,18 +786,30 @@ fn train_ppo_decisions(
             total_steps: cfg.steps,
         });
         out_rows.push(row);
-        if checkpoint_due(before, transitions, cfg.checkpoint_every) {
-            save_stores(
-                &[&ppo.net.vs],
-                &out.join(format!("checkpoints/step-{transitions}.safetensors")),
-            )?;
-        }
         if snapshot_due(cfg, before, transitions) {
-            let snap = self_play_snapshot(cfg, Some(&[&ppo.net.vs]))?;
-            env.set_opponent(Opponent::Net(Box::new(snap)));
+            let name = format!("self-play-step-{transitions}.safetensors");
+            set_self_play(cfg, out, &name, Some(&ppo), &mut env)?;
+            self_play = Some(name);
         }
         if let Some(sc) = sched.as_mut() {
             sc.advance(cfg, before, transitions, &mut env, &[&ppo.net.vs])?;
+        }
+        if boundary && checkpoint_due(last_checkpoint, transitions, cfg.checkpoint_every) {
+            last_checkpoint = transitions;
+            let state = ResumeState {
+                transitions,
+                update,
+                env_ticks: env.ticks(),
+                episodes: env.episodes(),
+                total_episodes: tally.total_episodes,
+                rng_seed: rng.get_seed(),
+                rng_stream: rng.get_stream(),
+                rng_word_pos: rng.get_word_pos().to_string(),
+                value_norm: ppo.value_norm,
+                schedule: sched.as_ref().map(ScheduleRunner::state),
+                self_play: self_play.clone(),
+            };
+            write_checkpoint(out, &ppo, &state)?;
         }
     }
     let final_weights = out.join("final.safetensors");
@@ -730,6 +819,133 @@ fn train_ppo_decisions(
         transitions,
         final_weights,
     })
+}
+
+/// Where a decision-level run stands at a checkpoint (an episode boundary):
+/// with the weights (`step-N.safetensors`) and the optimiser's moments
+/// (`step-N.adam.safetensors`), everything `train --resume` needs to go on
+/// as if the run had not stopped. Saved as `checkpoints/step-N.resume.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ResumeState {
+    pub transitions: u64,
+    pub update: u64,
+    pub env_ticks: u64,
+    /// Each match's next episode number.
+    pub episodes: Vec<u64>,
+    pub total_episodes: u64,
+    /// The ChaCha8 stream (sampling, minibatch order): seed, stream and
+    /// word position (a decimal string: it is a u128).
+    pub rng_seed: [u8; 32],
+    pub rng_stream: u64,
+    pub rng_word_pos: String,
+    pub value_norm: crate::ppo::RunningNorm,
+    /// The opponent schedule's stage and snapshot pool.
+    pub schedule: Option<(usize, Vec<(u64, String)>)>,
+    /// The self-play snapshot in play (a file in `pool/`).
+    pub self_play: Option<String>,
+}
+
+impl ResumeState {
+    fn rng(&self) -> Result<ChaCha8Rng, LearnError> {
+        let mut r = ChaCha8Rng::from_seed(self.rng_seed);
+        r.set_stream(self.rng_stream);
+        r.set_word_pos(self.rng_word_pos.parse::<u128>().map_err(|_| {
+            LearnError::Config(format!("bad RNG position {:?}", self.rng_word_pos))
+        })?);
+        Ok(r)
+    }
+}
+
+fn write_checkpoint(out: &Path, ppo: &Ppo, state: &ResumeState) -> Result<(), LearnError> {
+    let ck = out.join("checkpoints");
+    let n = state.transitions;
+    save_stores(&[&ppo.net.vs], &ck.join(format!("step-{n}.safetensors")))?;
+    if let Some(a) = &ppo.adam {
+        tch::Tensor::write_safetensors(&a.state(), ck.join(format!("step-{n}.adam.safetensors")))?;
+    }
+    let path = ck.join(format!("step-{n}.resume.json"));
+    let json = serde_json::to_string_pretty(state).map_err(|e| LearnError::Json {
+        path: path.clone(),
+        source: e,
+    })?;
+    // Written last: a checkpoint counts once its resume state exists.
+    std::fs::write(&path, json).map_err(|e| LearnError::io(&path, e))
+}
+
+/// Makes `pool/NAME` the self-play opponent, writing the live weights
+/// there first when `live` is given.
+fn set_self_play(
+    cfg: &TrainConfig,
+    out: &Path,
+    name: &str,
+    live: Option<&Ppo>,
+    env: &mut VecEnv,
+) -> Result<(), LearnError> {
+    let dir = out.join("pool");
+    std::fs::create_dir_all(&dir).map_err(|e| LearnError::io(&dir, e))?;
+    let path = dir.join(name);
+    if let Some(p) = live {
+        save_stores(&[&p.net.vs], &path)?;
+    }
+    let mut snap = self_play_snapshot(cfg, None)?;
+    snap.load_weights(&path)?;
+    env.set_opponent(Opponent::Net(Box::new(snap)));
+    Ok(())
+}
+
+/// Continues the run in `dir` from its latest resumable checkpoint, as if
+/// it had not stopped (decision-level PPO runs; `steps`, if given, replaces
+/// the run's length). metrics.csv keeps the rows up to that checkpoint.
+pub fn resume(
+    dir: &Path,
+    steps: Option<u64>,
+    progress: &mut dyn FnMut(&Progress<'_>),
+) -> Result<TrainSummary, LearnError> {
+    let cfg_path = dir.join("config.json");
+    let text = std::fs::read_to_string(&cfg_path).map_err(|e| LearnError::io(&cfg_path, e))?;
+    let mut cfg: TrainConfig = serde_json::from_str(&text).map_err(|e| LearnError::Json {
+        path: cfg_path.clone(),
+        source: e,
+    })?;
+    if cfg.algo != Algo::Ppo || cfg.ppo.decision.is_none() {
+        return Err(LearnError::Config(
+            "--resume continues decision-level PPO runs (--preset team) only".into(),
+        ));
+    }
+    if let Some(s) = steps {
+        cfg.steps = s;
+        let json = serde_json::to_string_pretty(&cfg).map_err(|e| LearnError::Json {
+            path: cfg_path.clone(),
+            source: e,
+        })?;
+        std::fs::write(&cfg_path, json).map_err(|e| LearnError::io(&cfg_path, e))?;
+    }
+    let ck = dir.join("checkpoints");
+    let mut best: Option<u64> = None;
+    if let Ok(rd) = std::fs::read_dir(&ck) {
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if let Some(n) = name
+                .strip_prefix("step-")
+                .and_then(|n| n.strip_suffix(".resume.json"))
+                .and_then(|n| n.parse::<u64>().ok())
+            {
+                best = best.max(Some(n));
+            }
+        }
+    }
+    let n = best.ok_or_else(|| LearnError::Spec {
+        spec: dir.display().to_string(),
+        reason: "no checkpoints/step-N.resume.json to resume from".into(),
+    })?;
+    let path = ck.join(format!("step-{n}.resume.json"));
+    let text = std::fs::read_to_string(&path).map_err(|e| LearnError::io(&path, e))?;
+    let state: ResumeState = serde_json::from_str(&text).map_err(|e| LearnError::Json {
+        path: path.clone(),
+        source: e,
+    })?;
+    tch::manual_seed(cfg.seed as i64);
+    train_ppo_decisions(&cfg, dir, Some(state), progress)
 }
 
 /// Closes `p` (if open) into `tr` with the value `next_value` after it;

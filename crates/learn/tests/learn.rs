@@ -507,3 +507,60 @@ fn team_policies_decide_alike_however_they_are_asked() {
         "an untrained team changes its mind ({changes})"
     );
 }
+
+/// `train --resume`: a run killed after a checkpoint and resumed writes the
+/// same metrics.csv and the same final weights as one that never stopped
+/// (decision-level preset, an opponent schedule with a snapshot pool, so
+/// the optimiser's moments, the RNG stream, the value normalisation, the
+/// matches, the schedule's stage and the pool all have to come back).
+#[test]
+fn a_resumed_run_writes_what_an_uninterrupted_one_does() {
+    use naosoccer_learn::ppo::PpoConfig;
+    use naosoccer_learn::schedule::Schedule;
+
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let mut cfg = tiny_config(Algo::Ppo, 41);
+    cfg.ppo = PpoConfig::team();
+    cfg.ppo.rollout = 32;
+    cfg.matches = 4;
+    cfg.learners = vec![0, 1, 2, 3];
+    // 60-tick episodes of 16 robots: 960 transitions each, six of them.
+    cfg.steps = 6 * 960;
+    cfg.checkpoint_every = 1000;
+    let mut sched = Schedule::parse("idle@2000,random+pool").unwrap();
+    sched.pool_every = 1500;
+    cfg.opponent = OpponentSpec::Schedule(sched);
+
+    let whole = out_dir("resume_whole");
+    tch::manual_seed(cfg.seed as i64);
+    train(&cfg, &whole, &mut |_| {}).unwrap();
+
+    let split = out_dir("resume_split");
+    // Killed while writing its 8th row (the 6th closed the third episode
+    // and checkpointed).
+    let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train(&cfg, &split, &mut |p| {
+            if p.row.update == 8 {
+                panic!("killed");
+            }
+        })
+        .unwrap();
+    }));
+    assert!(killed.is_err());
+    let partial = std::fs::read_to_string(split.join("metrics.csv")).unwrap();
+    assert_eq!(
+        partial.lines().count(),
+        1 + 8,
+        "the killed run wrote 8 rows"
+    );
+    naosoccer_learn::train::resume(&split, None, &mut |_| {}).unwrap();
+
+    let a = std::fs::read_to_string(whole.join("metrics.csv")).unwrap();
+    let b = std::fs::read_to_string(split.join("metrics.csv")).unwrap();
+    assert_eq!(a, b, "resumed metrics differ");
+    assert!(a.lines().count() >= 12, "{a}");
+    let wa = std::fs::read(whole.join("final.safetensors")).unwrap();
+    let wb = std::fs::read(split.join("final.safetensors")).unwrap();
+    assert!(wa == wb, "resumed final weights differ");
+}
