@@ -103,6 +103,19 @@ pub struct TrainArgs {
     /// PPO: per-tick discount.
     #[arg(long)]
     gamma: Option<f64>,
+    /// PPO team preset: the KL early stop's target (0: no early stop).
+    #[arg(long)]
+    target_kl: Option<f64>,
+    /// PPO: the learning rate of actor and critic at the start.
+    #[arg(long)]
+    lr: Option<f64>,
+    /// Drill episodes instead of matches: the learners alone before the
+    /// opponent goal, the ball at a random spot; an episode ends with a goal
+    /// or the clock (use a short --minutes). `anywhere`: the robot anywhere
+    /// within 0.8 m of the ball, facing anywhere; `behind`: within 45
+    /// degrees of straight behind it, facing it +-30 degrees.
+    #[arg(long, value_parser = ["anywhere", "behind"])]
+    drill: Option<String>,
     /// Observation layout version (2, the current one; 1 for the shipped
     /// paper-era teams' layout).
     #[arg(long)]
@@ -181,6 +194,13 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     if let Some(g) = a.gamma {
         cfg.ppo.gamma = g;
     }
+    if let Some(k) = a.target_kl {
+        cfg.ppo.target_kl = (k > 0.0).then_some(k);
+    }
+    if let Some(lr) = a.lr {
+        cfg.ppo.lr_actor = lr;
+        cfg.ppo.lr_critic = lr;
+    }
     cfg.ppo.central_critic |= a.central_critic;
     if let Some(d) = cfg.ppo.decision.as_mut() {
         if let Some(k) = a.persist {
@@ -197,6 +217,11 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     if let Some(v) = a.obs_version {
         cfg.obs_version = v;
     }
+    cfg.drill = match a.drill.as_deref() {
+        Some("behind") => Some(naosoccer_learn::env::Drill::behind_the_ball()),
+        Some(_) => Some(naosoccer_learn::env::Drill::default()),
+        None => None,
+    };
     cfg.dqn.shared = a.shared;
     if let Some(e) = a.epsilon {
         cfg.dqn.epsilon = e;

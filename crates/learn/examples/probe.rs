@@ -10,6 +10,9 @@ use naosoccer_learn::LearnedPolicy;
 use naosoccer_proto::{Observation, Team};
 use naosoccer_referee::{Match, MatchConfig};
 
+/// A case: its name, the robot's (x, y, heading) and the ball's (x, y).
+type Case = (&'static str, (f32, f32, f32), (f32, f32));
+
 const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
 
 fn state(base: &Observation, player: usize, me: (f32, f32, f32), ball: (f32, f32)) -> Observation {
@@ -39,7 +42,7 @@ fn main() {
     let m = Match::new(&MatchConfig::default(), 1).unwrap();
     let base = m.observe(Team::Blue, 0);
     let pi = std::f32::consts::PI;
-    let cases: [(&str, (f32, f32, f32), (f32, f32)); 6] = [
+    let cases: [Case; 6] = [
         (
             "0.3 m behind the ball, facing it",
             (-0.3, 0.0, 0.0),

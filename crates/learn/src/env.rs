@@ -81,6 +81,55 @@ struct Slot {
     finished: Option<Episode>,
     /// Index of this episode's opponent.
     opp: usize,
+    drill: Option<Drill>,
+}
+
+/// A drill instead of a match: the learning robots alone before the
+/// opponent goal (every other robot stands aside, by the own goal line),
+/// the ball at a random spot of the attacking half and each learner within
+/// `robot_radius` of it, facing anywhere. The episode ends with a goal (a
+/// success) or when the match clock runs out.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Drill {
+    /// Ball x range (metres, the learner's frame: attacking +x).
+    pub ball_x: (f32, f32),
+    /// Ball |y| bound, metres.
+    pub ball_y: f32,
+    /// Largest robot-ball distance at the start, metres (at least 0.25).
+    pub robot_radius: f32,
+    /// The learner stands at an angle in +-`spread` (radians) from the
+    /// spot straight behind the ball (on the side away from the goal):
+    /// pi puts it anywhere around the ball.
+    pub spread: f32,
+    /// It faces the ball turned by up to +-this (radians): pi, anywhere.
+    pub heading_noise: f32,
+}
+
+impl Default for Drill {
+    /// Anywhere around the ball, facing anywhere.
+    fn default() -> Drill {
+        Drill {
+            ball_x: (0.5, 2.0),
+            ball_y: 1.2,
+            robot_radius: 0.8,
+            spread: std::f32::consts::PI,
+            heading_noise: std::f32::consts::PI,
+        }
+    }
+}
+
+impl Drill {
+    /// The easier drill of the learning test: behind the ball (within 45
+    /// degrees of straight behind it), roughly facing it (+-30 degrees).
+    pub fn behind_the_ball() -> Drill {
+        Drill {
+            ball_x: (0.5, 2.0),
+            ball_y: 1.0,
+            robot_radius: 0.6,
+            spread: std::f32::consts::FRAC_PI_4,
+            heading_noise: std::f32::consts::FRAC_PI_6,
+        }
+    }
 }
 
 /// The vectorised environment.
@@ -115,8 +164,9 @@ impl Mix {
         let total: f64 = weights.iter().sum();
         if opponents.is_empty()
             || opponents.len() != weights.len()
-            || weights.iter().any(|w| !(*w >= 0.0))
-            || !(total > 0.0)
+            || weights.iter().any(|w| !w.is_finite() || *w < 0.0)
+            || !total.is_finite()
+            || total <= 0.0
         {
             return Err(LearnError::Config(format!(
                 "opponent weights {weights:?} for {} opponents",
@@ -195,6 +245,7 @@ impl VecEnv {
                 episode: 0,
                 finished: None,
                 opp: 0,
+                drill: None,
             };
             slot.build_policies(&env, &mix);
             slot.observe_all();
@@ -297,6 +348,16 @@ impl VecEnv {
         Ok(())
     }
 
+    /// Plays `drill` episodes instead of matches (`None`: matches); every
+    /// match starts its current episode afresh.
+    pub fn set_drill(&mut self, drill: Option<Drill>) -> Result<(), LearnError> {
+        for slot in &mut self.slots {
+            slot.drill = drill;
+        }
+        let episodes = self.episodes();
+        self.restart_at(&episodes, self.ticks)
+    }
+
     /// Starts every match afresh at episode `episodes[i]` (as if that many
     /// had finished), the tick counter at `ticks`: where a resumed run picks
     /// up, at an episode boundary.
@@ -312,6 +373,7 @@ impl VecEnv {
         for (slot, &e) in self.slots.iter_mut().zip(episodes) {
             slot.episode = e;
             slot.m = Match::new(&self.cfg, episode_seed(self.env.seed, slot.index, e))?;
+            slot.place_drill(&self.env);
             slot.returns = vec![0.0; l];
             slot.finished = None;
             slot.build_policies(&self.env, &self.mix);
@@ -521,6 +583,7 @@ impl Slot {
                 joint[i] = policy.act(&self.obs[i]);
             }
         }
+        let score = self.m.score();
         self.m.step(&joint);
         self.observe_all();
         // Each observation carries its robot's reward for the tick
@@ -530,7 +593,7 @@ impl Slot {
             rewards[k] = r;
             self.returns[k] += r;
         }
-        self.m.is_finished()
+        self.m.is_finished() || (self.drill.is_some() && self.m.score() != score)
     }
 
     fn restart(&mut self, cfg: &MatchConfig, env: &EnvConfig, mix: &Mix) -> Result<(), LearnError> {
@@ -551,8 +614,56 @@ impl Slot {
         });
         self.episode += 1;
         self.m = Match::new(cfg, episode_seed(env.seed, self.index, self.episode))?;
+        self.place_drill(env);
         self.build_policies(env, mix);
         self.observe_all();
         Ok(())
+    }
+
+    /// Sets up a drill episode (see [`Drill`]), placed from the episode's
+    /// seed.
+    fn place_drill(&mut self, env: &EnvConfig) {
+        let Some(d) = self.drill else {
+            return;
+        };
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(episode_seed(
+            env.seed ^ 0xD1_11D1_11D1,
+            self.index,
+            self.episode,
+        ));
+        // The learner's frame to the world's: red sees the world turned
+        // half round.
+        let sign = if self.team == Team::Blue { 1.0 } else { -1.0 };
+        let turn = if self.team == Team::Blue {
+            0.0
+        } else {
+            std::f32::consts::PI
+        };
+        let bx = rng.random_range(d.ball_x.0..=d.ball_x.1);
+        let by = rng.random_range(-d.ball_y..=d.ball_y);
+        let sim = self.m.sim_mut();
+        sim.place_ball(sign * bx, sign * by);
+        let own = self.team.index() * PLAYERS_PER_TEAM;
+        let mut aside = 0;
+        for r in RobotId::all() {
+            let i = r.index();
+            let learner =
+                i >= own && i < own + PLAYERS_PER_TEAM && env.learners.contains(&(i - own));
+            if learner {
+                let dist = rng.random_range(0.25..=d.robot_radius.max(0.25));
+                let ang = rng.random_range(-d.spread..=d.spread);
+                let noise = rng.random_range(-d.heading_noise..=d.heading_noise);
+                // Straight behind the ball is -x from it; the robot faces
+                // the ball, turned by the noise.
+                let (x, y) = (bx - dist * ang.cos(), by - dist * ang.sin());
+                let h = ang + noise;
+                sim.place_robot(i, sign * x, sign * y, h + turn);
+            } else {
+                let (x, y) = (-2.6, -2.0 + 0.55 * aside as f32);
+                sim.place_robot(i, sign * x, sign * y, turn);
+                aside += 1;
+            }
+        }
     }
 }

@@ -474,7 +474,7 @@ impl LearnedPolicy {
                 let y = tch::no_grad(|| {
                     let mut logits = ac.logits(&x);
                     if let Some(m) = &mask {
-                        logits = logits + m;
+                        logits += m;
                     }
                     if sample {
                         logits.softmax(-1, Kind::Float)

@@ -128,6 +128,9 @@ pub struct TrainConfig {
     pub match_config: MatchConfig,
     pub obs_version: u32,
     pub obs_scale: ObsScale,
+    /// Drill episodes instead of matches (see `env::Drill`).
+    #[serde(default)]
+    pub drill: Option<crate::env::Drill>,
 }
 
 impl TrainConfig {
@@ -148,6 +151,7 @@ impl TrainConfig {
             obs_version: OBS_VERSION,
             obs_scale: ObsScale::from_config(&match_config),
             match_config,
+            drill: None,
         }
     }
 }
@@ -433,6 +437,9 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
         opponent_for(cfg)?,
     )?;
     env.set_obs_scale(run_scale(cfg));
+    if cfg.drill.is_some() {
+        env.set_drill(cfg.drill)?;
+    }
     Ok(env)
 }
 

@@ -564,3 +564,90 @@ fn a_resumed_run_writes_what_an_uninterrupted_one_does() {
     let wb = std::fs::read(split.join("final.safetensors")).unwrap();
     assert!(wa == wb, "resumed final weights differ");
 }
+
+/// The share of drill episodes (of `episodes`) that end in a goal, the team
+/// playing as it plays everywhere (`act_matches`: sampled, holding its
+/// decisions, shoot masked out of reach).
+fn drill_success(cfg: &TrainConfig, spec: &str, seed: u64, episodes: usize) -> f64 {
+    let mut env = VecEnv::new(
+        &cfg.match_config,
+        EnvConfig {
+            matches: 16,
+            learners: cfg.learners.clone(),
+            teammates: PolicyKind::Idle,
+            threads: 1,
+            seed,
+        },
+        Opponent::Builtin(PolicyKind::Idle),
+    )
+    .unwrap();
+    env.set_drill(cfg.drill).unwrap();
+    let mut p = LearnedPolicy::load(spec).unwrap();
+    let mut actions = vec![0usize; env.rows()];
+    let (mut done, mut goals) = (0usize, 0usize);
+    while done < episodes {
+        let obs: Vec<_> = (0..env.rows())
+            .map(|r| env.learner_observation(r).clone())
+            .collect();
+        // One "match" per row, keyed by its row: a row's ticks restart at 0
+        // with each episode, which starts its decision state afresh.
+        let teams: Vec<(u64, &[naosoccer_proto::Observation])> = obs
+            .iter()
+            .enumerate()
+            .map(|(r, o)| (seed + r as u64, std::slice::from_ref(o)))
+            .collect();
+        p.act_matches(&teams, &mut actions);
+        for e in env.step(&actions).unwrap() {
+            done += 1;
+            goals += usize::from(e.goals_for > 0);
+        }
+    }
+    goals as f64 / done as f64
+}
+
+/// Issue 13: in a test-sized budget the `team` preset learns the drill of
+/// scoring on an empty goal: the ball at a random spot of the attacking
+/// half, the robot within 0.6 m behind it (45 degrees either side of
+/// straight behind) roughly facing it; it must walk up, line up and shoot,
+/// in 30 seconds. At least 90% of fresh episodes end in a goal.
+#[test]
+#[ignore = "does not reach 90% in a test-sized budget yet (issue 13, step 7)"]
+fn team_ppo_learns_to_score_on_an_empty_goal() {
+    use naosoccer_learn::env::Drill;
+    use naosoccer_learn::ppo::PpoConfig;
+
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let m = MatchConfig::from_file(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/train.toml"
+    )))
+    .unwrap();
+    let mut cfg = TrainConfig::new(Algo::Ppo, MatchConfig { minutes: 0.5, ..m });
+    cfg.ppo = PpoConfig::team();
+    cfg.seed = 3;
+    cfg.matches = 32;
+    cfg.threads = 1;
+    cfg.learners = vec![1];
+    cfg.opponent = OpponentSpec::Builtin("idle".into());
+    cfg.drill = Some(Drill::behind_the_ball());
+    cfg.checkpoint_every = 0;
+    cfg.steps = DRILL_STEPS;
+    let dir = out_dir("ppo_drill");
+    tch::manual_seed(3);
+    train(&cfg, &dir, &mut |_| {}).unwrap();
+    let spec = format!("ppo:{}", dir.display());
+    let untrained = {
+        let d = out_dir("ppo_drill_untrained");
+        let mut c = cfg.clone();
+        c.steps = 1;
+        train(&c, &d, &mut |_| {}).unwrap();
+        drill_success(&cfg, &format!("ppo:{}", d.display()), 1000, 64)
+    };
+    let learned = drill_success(&cfg, &spec, 1000, 200);
+    eprintln!("empty-goal drill: untrained {untrained:.2}, learned {learned:.2}");
+    assert!(learned >= 0.9, "learned {learned:.2} of drills scored");
+    assert!(untrained < 0.5, "the drill is not trivial ({untrained:.2})");
+}
+
+const DRILL_STEPS: u64 = 800_000;
