@@ -6,6 +6,7 @@ use rand_chacha::ChaCha8Rng;
 use rapier3d::math::{Pose, Rot3, Vec3};
 use rapier3d::prelude::{ColliderHandle, PhysicsWorld, RigidBody, RigidBodyHandle};
 
+use crate::place::{free_spot, Area};
 use crate::world::{build, default_robot_spot, standing_pose, ROBOT_TAG};
 use crate::{
     BallState, Command, Kick, RobotModel, RobotState, SimConfig, SimError, Snapshot, ROBOTS,
@@ -24,6 +25,8 @@ struct Ctrl {
     speed_factor: f32,
     last_touch: Option<u64>,
     /// A stumble in progress: direction of the fall and the step it began.
+    /// The controller is off meanwhile; `fallen` follows once the tilt
+    /// passes `fall_tilt` (or never, if the robot catches itself).
     stumble: Option<(f32, f32, u64)>,
 }
 
@@ -48,6 +51,7 @@ pub struct Sim {
     ball: RigidBodyHandle,
     ball_collider: ColliderHandle,
     robots: [RigidBodyHandle; ROBOTS],
+    goal_colliders: Vec<ColliderHandle>,
     ctrl: [Ctrl; ROBOTS],
     rng: ChaCha8Rng,
     seed: u64,
@@ -80,6 +84,7 @@ impl Sim {
             ball: built.ball,
             ball_collider: built.ball_collider,
             robots: built.robots,
+            goal_colliders: built.goal_colliders,
             ctrl: [Ctrl::default(); ROBOTS],
             rng: ChaCha8Rng::seed_from_u64(seed),
             seed,
@@ -156,11 +161,16 @@ impl Sim {
     ///   drift while walking); a capped upright torque resists tilt;
     /// - a robot walking against another (held under half its speed with
     ///   another torso within `stumble_distance` ahead) stumbles with
-    ///   probability `dt / stumble_time` a step, and is thrown over;
-    /// - a kick strikes once its wind-up is over: the ball moves only if its
-    ///   centre lies within the kick's reach in front of the robot;
-    /// - rapier steps; a robot tilted past `fall_tilt` has fallen; a slow
-    ///   ball on the ground stops.
+    ///   probability `dt / stumble_time` a step: its controller lets go and a
+    ///   torque throws it over (see `stumble_torque`);
+    /// - a fallen robot is passive: no force or torque of its own acts on it,
+    ///   only gravity and contacts;
+    /// - a kick strikes once its wind-up is over: the ball is hit only if its
+    ///   centre lies within the kick's reach in front of the robot, and then
+    ///   as by a foot swung at it (see `SimConfig::kick_speed`);
+    /// - rapier steps (the ball swept against every collider, robots
+    ///   included, so a fast ball cannot skip through a shin); a robot tilted
+    ///   past `fall_tilt` has fallen; a slow ball on the ground stops.
     pub fn step(&mut self) {
         self.snapshot.kicks.clear();
         if self.steps % self.noise_period_steps == 0 {
@@ -178,23 +188,22 @@ impl Sim {
             body.reset_forces(false);
             body.reset_torques(false);
             self.strikes[i] = false;
-            if c.fallen {
-                if let Some((x, y, since)) = c.stumble {
-                    // Throw the body over until it is well past its balance
-                    // limit (or give up after a second, leaning on something).
-                    if tilt_of(body.rotation()) < 2.0 * cfg.fall_tilt
-                        && self.steps - since < self.stumble_steps
-                    {
-                        let axis = Vec3::Z.cross(Vec3::new(x, y, 0.0));
-                        body.add_torque(axis * cfg.stumble_torque, true);
-                    } else {
-                        c.stumble = None;
-                        // Held up by whatever it leant on: it caught itself.
-                        if tilt_of(body.rotation()) < cfg.fall_tilt {
-                            c.fallen = false;
-                        }
-                    }
+            if let Some((x, y, since)) = c.stumble {
+                // Throw the body over until it is well past its balance
+                // limit, or give up after a second: held up by whatever it
+                // leant on, it caught itself if it never tilted past
+                // `fall_tilt`, and its controller takes over again.
+                if tilt_of(body.rotation()) < 2.0 * cfg.fall_tilt
+                    && self.steps - since < self.stumble_steps
+                {
+                    let axis = Vec3::Z.cross(Vec3::new(x, y, 0.0));
+                    body.add_torque(axis * cfg.stumble_torque, true);
+                } else {
+                    c.stumble = None;
                 }
+                continue;
+            }
+            if c.fallen {
                 continue;
             }
             if c.kick_phase.is_none() && c.command == Command::Shoot {
@@ -223,11 +232,11 @@ impl Sim {
                 && self.rng.random::<f32>() < dt / cfg.stumble_time
             {
                 // The gait stumbles: the controller lets go and the robot
-                // topples backward or sideways, away from what blocks it.
+                // topples backward or sideways, away from what blocks it. It
+                // has fallen once it tilts past `fall_tilt`, not before.
                 let away = self.rng.random_range(-1.2f32..=1.2);
                 let h = heading_of(body.rotation()) + std::f32::consts::PI + away;
                 c.stumble = Some((h.cos(), h.sin(), self.steps));
-                c.fallen = true;
                 continue;
             }
             drive(body, cfg, self.mass, self.yaw_inertia, target_v, target_w);
@@ -283,14 +292,14 @@ impl Sim {
         self.refresh_snapshot();
     }
 
-    /// Puts the ball at rest on the ground at `(x, y)`.
-    pub fn place_ball(&mut self, x: f32, y: f32) {
-        let r = self.cfg.ball_radius;
-        let ball = &mut self.world.bodies[self.ball];
-        ball.set_position(Pose::from_translation(Vec3::new(x, y, r)), true);
-        ball.set_linvel(Vec3::ZERO, true);
-        ball.set_angvel(Vec3::ZERO, true);
+    /// Puts the ball at rest on the ground at the free spot nearest
+    /// `(x, y)` (see [`Sim::place_all`] for "free") within the field lines,
+    /// and returns the spot used.
+    pub fn place_ball(&mut self, x: f32, y: f32) -> (f32, f32) {
+        let spot = self.ball_spot((x, y), &self.robots);
+        self.put_ball(spot);
         self.refresh_snapshot();
+        spot
     }
 
     /// Sets the ball rolling on the ground at `(vx, vy)` m/s.
@@ -301,9 +310,111 @@ impl Sim {
         self.refresh_snapshot();
     }
 
-    /// Stands robot `robot` upright at rest at `(x, y)` facing `heading`;
-    /// clears a fall and any kick in progress.
-    pub fn place_robot(&mut self, robot: usize, x: f32, y: f32, heading: f32) {
+    /// Stands robot `robot` upright at rest facing `heading` at the free spot
+    /// nearest `(x, y)` within the field lines plus half the ground margin,
+    /// and returns the spot used; clears a fall, a stumble and any kick in
+    /// progress.
+    pub fn place_robot(&mut self, robot: usize, x: f32, y: f32, heading: f32) -> (f32, f32) {
+        let mut blockers = [self.ball; ROBOTS];
+        for (j, b) in blockers.iter_mut().skip(1).enumerate() {
+            *b = self.robots[if j < robot { j } else { j + 1 }];
+        }
+        let spot = self.robot_spot(robot, (x, y), heading, &blockers);
+        self.put_robot(robot, spot, heading);
+        self.refresh_snapshot();
+        spot
+    }
+
+    /// Stands robot `robot` upright at rest where it lies (torso x, y),
+    /// keeping its heading, or at the nearest free spot if that is taken;
+    /// returns the spot used.
+    pub fn stand_up(&mut self, robot: usize) -> (f32, f32) {
+        let body = &self.world.bodies[self.robots[robot]];
+        let t = body.translation();
+        let heading = heading_of(body.rotation());
+        self.place_robot(robot, t.x, t.y, heading)
+    }
+
+    /// Puts everything in place at once (a kick-off): the ball at rest at the
+    /// free spot nearest `ball`, then robot 0, 1, ... upright at rest at the
+    /// free spot nearest its `(x, y)`, facing its heading. Each body keeps
+    /// clear of those put before it in this call; bodies not yet moved do not
+    /// block. Returns the spots used.
+    ///
+    /// "Free" everywhere in the placement API: every collider of the body
+    /// keeps 2 cm from every collider of the bodies that block and of the
+    /// goals (lying robots included). The search is deterministic: the asked
+    /// spot, then rings 5 cm apart around it, each walked counter-clockwise
+    /// from +x, the first clear candidate inside the allowed area winning.
+    /// The ball stays within the field lines, robots within the lines plus
+    /// half the ground margin.
+    pub fn place_all(
+        &mut self,
+        ball: (f32, f32),
+        robots: &[(f32, f32, f32); ROBOTS],
+    ) -> ((f32, f32), [(f32, f32); ROBOTS]) {
+        let ball_spot = self.ball_spot(ball, &[]);
+        self.put_ball(ball_spot);
+        let mut spots = [(0.0, 0.0); ROBOTS];
+        let mut blockers = [self.ball; ROBOTS + 1];
+        for (i, &(x, y, heading)) in robots.iter().enumerate() {
+            spots[i] = self.robot_spot(i, (x, y), heading, &blockers[..=i]);
+            self.put_robot(i, spots[i], heading);
+            blockers[i + 1] = self.robots[i];
+        }
+        self.refresh_snapshot();
+        (ball_spot, spots)
+    }
+
+    fn ball_spot(&self, at: (f32, f32), blockers: &[RigidBodyHandle]) -> (f32, f32) {
+        let r = self.cfg.ball_radius;
+        let area = Area {
+            half_x: self.cfg.field_length * 0.5,
+            half_y: self.cfg.field_width * 0.5,
+        };
+        free_spot(
+            &self.world,
+            self.ball,
+            |x, y| Pose::from_translation(Vec3::new(x, y, r)),
+            at,
+            area,
+            blockers,
+            &self.goal_colliders,
+        )
+    }
+
+    fn robot_spot(
+        &self,
+        robot: usize,
+        at: (f32, f32),
+        heading: f32,
+        blockers: &[RigidBodyHandle],
+    ) -> (f32, f32) {
+        let area = Area {
+            half_x: (self.cfg.field_length + self.cfg.ground_margin) * 0.5,
+            half_y: (self.cfg.field_width + self.cfg.ground_margin) * 0.5,
+        };
+        let h = self.torso_height;
+        free_spot(
+            &self.world,
+            self.robots[robot],
+            |x, y| standing_pose(h, x, y, heading),
+            at,
+            area,
+            blockers,
+            &self.goal_colliders,
+        )
+    }
+
+    fn put_ball(&mut self, (x, y): (f32, f32)) {
+        let r = self.cfg.ball_radius;
+        let ball = &mut self.world.bodies[self.ball];
+        ball.set_position(Pose::from_translation(Vec3::new(x, y, r)), true);
+        ball.set_linvel(Vec3::ZERO, true);
+        ball.set_angvel(Vec3::ZERO, true);
+    }
+
+    fn put_robot(&mut self, robot: usize, (x, y): (f32, f32), heading: f32) {
         let pose = standing_pose(self.torso_height, x, y, heading);
         let body = &mut self.world.bodies[self.robots[robot]];
         body.set_position(pose, true);
@@ -313,16 +424,6 @@ impl Sim {
         c.fallen = false;
         c.kick_phase = None;
         c.stumble = None;
-        self.refresh_snapshot();
-    }
-
-    /// Stands robot `robot` upright where it lies (torso x, y), keeping its
-    /// heading, at rest.
-    pub fn stand_up(&mut self, robot: usize) {
-        let body = &self.world.bodies[self.robots[robot]];
-        let t = body.translation();
-        let heading = heading_of(body.rotation());
-        self.place_robot(robot, t.x, t.y, heading);
     }
 
     /// An impulse (N s, world frame) on robot `robot`'s torso origin.
@@ -398,10 +499,24 @@ impl Sim {
         if !in_reach {
             return;
         }
-        let speed = cfg.kick_speed * (1.0 + cfg.kick_speed_noise * speed_err);
+        // The foot is swung along the kick direction so that it sends a
+        // ball at rest off at the kick speed, and hits like a massive body:
+        // the ball's velocity along the swing becomes u + e (u - v_n), its
+        // velocity across the swing stays. A ball moving away faster than
+        // the foot is not reached.
+        let e = cfg.ball_restitution;
+        let foot = cfg.kick_speed * (1.0 + cfg.kick_speed_noise * speed_err) / (1.0 + e);
         let dir = heading + cfg.kick_angle_noise * angle_err;
-        let v = Vec3::new(dir.cos(), dir.sin(), 0.0) * speed;
-        self.world.bodies[self.ball].set_linvel(v, true);
+        let n = Vec3::new(dir.cos(), dir.sin(), 0.0);
+        let ball = &mut self.world.bodies[self.ball];
+        let v = ball.linvel();
+        let vn = v.dot(n);
+        if vn >= foot {
+            return;
+        }
+        let after = v + n * ((1.0 + e) * (foot - vn));
+        ball.set_linvel(after, true);
+        let speed = Vec3::new(after.x, after.y, 0.0).length();
         self.snapshot.kicks.push(Kick { robot: i, speed });
         self.ctrl[i].last_touch = Some(self.steps + 1);
     }
@@ -420,6 +535,7 @@ impl Sim {
                 pos: body.translation().to_array(),
                 heading: heading_of(body.rotation()),
                 tilt: tilt_of(body.rotation()),
+                rotation: body.rotation().to_array(),
                 vel: body.linvel().to_array(),
                 fallen: c.fallen,
                 kicking: c.kick_phase.is_some(),

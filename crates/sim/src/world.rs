@@ -20,6 +20,8 @@ pub(crate) struct Built {
     pub ball: RigidBodyHandle,
     pub ball_collider: ColliderHandle,
     pub robots: [RigidBodyHandle; ROBOTS],
+    /// The goals' colliders (posts, bars, nets): fixed obstacles to placement.
+    pub goal_colliders: Vec<ColliderHandle>,
 }
 
 /// Robots line up on their own half, facing the centre, until the referee
@@ -76,10 +78,11 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
     let mouth = cfg.goal_width * 0.5;
     let h = cfg.goal_height;
     let line = cfg.field_length * 0.5;
+    let mut goal_colliders = Vec::with_capacity(14);
     for s in [-1.0f32, 1.0] {
         let goal = world.insert_body(RigidBodyBuilder::fixed());
         let mut add = |c: ColliderBuilder| {
-            world.insert_collider(c.friction(0.3), Some(goal));
+            goal_colliders.push(world.insert_collider(c.friction(0.3), Some(goal)));
         };
         for side in [-1.0f32, 1.0] {
             add(fixed(
@@ -128,7 +131,11 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
             // turns 60 rad/s, more than a radian a step: rapier's contact
             // point, fixed to the ball, then leaves the ground within a step
             // and the ball hops and brakes. Spin plays no part in NAO soccer.
-            .lock_rotations(),
+            .lock_rotations()
+            // Rapier sweeps fast bodies against fixed colliders (goals,
+            // ground) by itself; full CCD also sweeps the ball against the
+            // robots, whose shins are thinner than a kick's travel in a step.
+            .ccd_enabled(true),
     );
     let ball_collider = world.insert_collider(
         ColliderBuilder::ball(cfg.ball_radius)
@@ -160,6 +167,10 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
                     radius,
                     half_length,
                 } => ColliderBuilder::cylinder(half_length, radius),
+                Primitive::Capsule {
+                    radius,
+                    half_length,
+                } => ColliderBuilder::capsule_z(half_length, radius),
             };
             let pose = match shape.primitive {
                 Primitive::Cylinder { .. } => {
@@ -199,6 +210,7 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
         ball,
         ball_collider,
         robots,
+        goal_colliders,
     })
 }
 
