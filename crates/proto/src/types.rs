@@ -353,7 +353,7 @@ pub enum Event {
     /// (kick-offs have their own event). Protocol 1.2.
     SetPlay {
         tick: u64,
-        kind: SetPlayKind,
+        play: SetPlayKind,
         team: Team,
         x: f32,
         y: f32,

@@ -4,7 +4,7 @@
 use std::f32::consts::PI;
 
 use naosoccer_proto::{
-    BallObs, Observation, RobotId, RobotObs, ScoreObs, Team, PLAYERS_PER_TEAM, ROBOTS,
+    BallObs, Observation, RobotId, RobotObs, ScoreObs, SetPlayObs, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_sim::Snapshot;
 
@@ -18,6 +18,9 @@ pub(crate) struct ObsContext<'a> {
     pub score: [u32; 2],
     pub down: &'a [bool; ROBOTS],
     pub controller: Option<RobotId>,
+    pub half: u8,
+    /// The set play in progress, from the observing team's side.
+    pub set_play: Option<SetPlayObs>,
 }
 
 /// Fills `out` for `player` of `team`. Writes every field, so a reused
@@ -65,6 +68,8 @@ pub(crate) fn fill(
         vy: sx * snap.ball.vel[1],
     };
     out.opponent_control = ctx.controller.is_some_and(|c| c.team() != team);
+    out.half = ctx.half;
+    out.set_play = ctx.set_play;
 }
 
 /// An observation with every field zero, to be filled by `observe_into`.
