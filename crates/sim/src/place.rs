@@ -57,7 +57,17 @@ pub(crate) fn free_spot(
 ) -> (f32, f32) {
     let (x, y) = area.clamp(x, y);
     let reach = body_reach(world, mover);
-    let clear = |cx: f32, cy: f32| is_clear(world, mover, reach, &pose_at(cx, cy), blockers, fixed);
+    let clear = |cx: f32, cy: f32| {
+        is_clear(
+            world,
+            mover,
+            reach,
+            &pose_at(cx, cy),
+            blockers,
+            fixed,
+            CLEARANCE,
+        )
+    };
     if clear(x, y) {
         return (x, y);
     }
@@ -76,7 +86,7 @@ pub(crate) fn free_spot(
     (x, y)
 }
 
-/// Whether `mover` at `pose` keeps `CLEARANCE` from the blockers (bodies at
+/// Whether `mover` at `pose` keeps `clearance` from the blockers (bodies at
 /// their current poses) and the `fixed` colliders. `reach` is
 /// [`body_reach`] of the mover.
 pub(crate) fn is_clear(
@@ -86,11 +96,12 @@ pub(crate) fn is_clear(
     pose: &Pose,
     blockers: &[RigidBodyHandle],
     fixed: &[ColliderHandle],
+    clearance: f32,
 ) -> bool {
     let movers = &world.bodies[mover];
     let clear_of = |m_pose: &Pose, m: ColliderHandle, o_pose: &Pose, o: ColliderHandle| {
         let (m, o) = (&world.colliders[m], &world.colliders[o]);
-        let m_box = m.shape().compute_aabb(m_pose).loosened(CLEARANCE);
+        let m_box = m.shape().compute_aabb(m_pose).loosened(clearance);
         if !m_box.intersects(&o.shape().compute_aabb(o_pose)) {
             return true;
         }
@@ -110,7 +121,7 @@ pub(crate) fn is_clear(
         }
         let other = &world.bodies[b];
         let gap = (other.translation() - pose.translation).length();
-        if gap > reach + body_reach(world, b) + CLEARANCE {
+        if gap > reach + body_reach(world, b) + clearance {
             continue;
         }
         for &oc in other.colliders() {

@@ -22,6 +22,31 @@ pub(crate) struct Built {
     pub robots: [RigidBodyHandle; ROBOTS],
     /// The goals' colliders (posts, bars, nets): fixed obstacles to placement.
     pub goal_colliders: Vec<ColliderHandle>,
+    /// Each robot's sole colliders, as (robot, collider).
+    pub soles: Vec<(usize, ColliderHandle)>,
+}
+
+/// Standing soles slide without friction (the drive force walks the robot);
+/// a lying robot's soles rub the ground like the rest of its body, or a
+/// robot that fell with some momentum would slide and spin on its heels for
+/// ever.
+pub(crate) fn set_sole_friction(
+    world: &mut PhysicsWorld,
+    cfg: &SimConfig,
+    soles: &[(usize, ColliderHandle)],
+    robot: usize,
+    lying: bool,
+) {
+    for &(_, c) in soles.iter().filter(|(i, _)| *i == robot) {
+        let co = &mut world.colliders[c];
+        if lying {
+            co.set_friction(cfg.robot_friction);
+            co.set_friction_combine_rule(CoefficientCombineRule::Average);
+        } else {
+            co.set_friction(0.0);
+            co.set_friction_combine_rule(CoefficientCombineRule::Min);
+        }
+    }
 }
 
 /// Robots line up on their own half, facing the centre, until the referee
@@ -147,6 +172,7 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
     );
 
     let mut robots = [RigidBodyHandle::invalid(); ROBOTS];
+    let mut soles = Vec::new();
     for (i, handle) in robots.iter_mut().enumerate() {
         let (x, y, heading) = default_robot_spot(cfg, i);
         *handle = world.insert_body(
@@ -186,7 +212,9 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
                 .density(0.0)
                 .user_data(ROBOT_TAG | i as u128);
             // Soles slide freely: the legs' bounded drive force stands in for
-            // the ground reaction of walking (see `Sim::step`).
+            // the ground reaction of walking (see `Sim::step`). A fallen
+            // robot's soles get the friction of the rest of its body back
+            // (`set_sole_friction`).
             let builder = if sole {
                 builder
                     .friction(0.0)
@@ -194,7 +222,10 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
             } else {
                 builder.friction(cfg.robot_friction)
             };
-            world.insert_collider(builder, Some(*handle));
+            let c = world.insert_collider(builder, Some(*handle));
+            if sole {
+                soles.push((i, c));
+            }
         }
     }
 
@@ -211,6 +242,7 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
         ball_collider,
         robots,
         goal_colliders,
+        soles,
     })
 }
 
