@@ -301,7 +301,9 @@ impl Match {
                         self.outcome.events.push(Event::GetUp { tick, robot });
                     }
                 }
-                Command::StandUp { robot } => self.sim.stand_up(robot.index()),
+                Command::StandUp { robot } => {
+                    self.sim.stand_up(robot.index());
+                }
                 Command::KickOff { team } => {
                     // Robots lying at a kick-off are stood up in their places.
                     for robot in RobotId::all() {
@@ -333,11 +335,12 @@ impl Match {
     }
 
     fn place_for_kickoff(&mut self, team: Team, first_tick: u64) {
-        self.sim.place_ball(0.0, 0.0);
-        for robot in RobotId::all() {
+        let mut spots = [(0.0, 0.0, 0.0); ROBOTS];
+        for (spot, robot) in spots.iter_mut().zip(RobotId::all()) {
             let [x, y, h] = self.kickoff.place(robot, team);
-            self.sim.place_robot(robot.index(), x, y, h);
+            *spot = (x, y, h);
         }
+        self.sim.place_all((0.0, 0.0), &spots);
         self.fall.clear();
         self.pass.reset();
         self.controller = None;
