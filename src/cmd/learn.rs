@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
+use naosoccer_learn::dqn::{DqnConfig, DqnPreset};
 use naosoccer_learn::eval::{format_table, play_matches, summarise, Side};
 use naosoccer_learn::ppo::{PpoConfig, Preset};
 use naosoccer_learn::train::{train, Algo, OpponentSpec, TrainConfig};
@@ -46,6 +47,7 @@ fn parse_players(s: &str) -> Result<Vec<usize>, String> {
 #[command(after_help = "Examples:
   naosoccer train --algo ppo --steps 2000000 --seed 1 --out runs/ppo-1
   naosoccer train --algo dqn --steps 2000000 --seed 1 --out runs/dqn-1
+  naosoccer train --algo dqn --preset team --steps 3000000 --seed 1 --out runs/dqn-team-1
   naosoccer train --algo ppo --preset cleanrl --opponent self-play:200000 --out runs/ppo-sp
 
 The run directory gets config.json (everything the run depends on),
@@ -65,10 +67,13 @@ pub struct TrainArgs {
     /// Run directory to write (created; existing files are overwritten).
     #[arg(long)]
     out: PathBuf,
-    /// PPO hyperparameters: paper (Algorithm 2, PPO-PyTorch defaults) or
-    /// cleanrl (GAE, advantage normalisation, grad-norm clipping, orthogonal init).
+    /// Hyperparameters. PPO: paper (Algorithm 2, PPO-PyTorch defaults) or
+    /// cleanrl (GAE, advantage normalisation, grad-norm clipping, orthogonal
+    /// init). DQN: paper (Algorithm 1: per-robot networks, fixed epsilon 0.3)
+    /// or team (Double DQN, 3-step returns, Huber loss, epsilon 1 -> 0.05 over
+    /// 1M transitions, one network for the team).
     #[arg(long, default_value = "paper")]
-    preset: Preset,
+    preset: String,
     /// Opponent: scripted, random, idle, a frozen team (ppo:DIR, dqn:DIR) or
     /// self-play[:N] (the learner's own snapshot, refreshed every N transitions).
     #[arg(long, default_value = "scripted")]
@@ -103,10 +108,12 @@ pub struct TrainArgs {
     /// PPO: passes over each rollout.
     #[arg(long)]
     epochs: Option<usize>,
-    /// DQN: one network shared by the team instead of one per robot (the paper).
+    /// DQN: one network shared by the team instead of one per robot (the
+    /// paper; the team preset always shares).
     #[arg(long)]
     shared: bool,
-    /// DQN: exploration rate (the paper: 0.3, fixed).
+    /// DQN: exploration rate (the paper: 0.3, fixed; the team preset: the
+    /// rate its schedule ends at).
     #[arg(long)]
     epsilon: Option<f64>,
 }
@@ -126,16 +133,28 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         .parse::<OpponentSpec>()
         .map_err(anyhow::Error::msg)?;
     cfg.checkpoint_every = a.checkpoint_every;
-    cfg.ppo = PpoConfig::preset(a.preset);
+    match a.algo {
+        Algo::Ppo => {
+            cfg.ppo = PpoConfig::preset(a.preset.parse::<Preset>().map_err(anyhow::Error::msg)?)
+        }
+        Algo::Dqn => {
+            cfg.dqn = DqnConfig::preset(a.preset.parse::<DqnPreset>().map_err(anyhow::Error::msg)?)
+        }
+    }
     if let Some(r) = a.rollout {
         cfg.ppo.rollout = r;
     }
     if let Some(e) = a.epochs {
         cfg.ppo.epochs = e;
     }
-    cfg.dqn.shared = a.shared;
+    if a.shared {
+        cfg.dqn.shared = true;
+    }
     if let Some(e) = a.epsilon {
         cfg.dqn.epsilon = e;
+        if cfg.dqn.epsilon_decay == 0 {
+            cfg.dqn.epsilon_start = e;
+        }
     }
     let start = Instant::now();
     let tty = std::io::stderr().is_terminal();

@@ -20,7 +20,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::dqn::{Dqn, DqnConfig};
+use crate::dqn::{Dqn, DqnConfig, NStep};
 use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
 use crate::obs::{ObsScale, OBS_DIM, OBS_VERSION};
 use crate::policy::{save_stores, ActMode, LearnedPolicy};
@@ -487,19 +487,25 @@ fn train_dqn(
     let (mut loss_sum, mut loss_n) = (0.0, 0u32);
     let mut out_rows = Vec::new();
     let mut step = 0usize;
+    let mut nstep = NStep::new(cfg.dqn.n_step, rows);
+    // Every transition here lasts one control tick.
+    let discount = cfg.dqn.discount(1);
     while transitions < cfg.steps {
         prev.copy_from_slice(env.observations());
-        dqn.act(&prev, robots, cfg.dqn.epsilon, &mut rng, &mut actions);
+        let epsilon = cfg.dqn.epsilon_at(transitions);
+        dqn.act(&prev, robots, epsilon, &mut rng, &mut actions);
         let finished = env.step(&actions)?;
         let next = env.observations();
         for i in 0..rows {
-            dqn.remember(
-                i % robots,
+            let next_obs = &next[i * OBS_DIM..(i + 1) * OBS_DIM];
+            nstep.push(
+                i,
                 &prev[i * OBS_DIM..(i + 1) * OBS_DIM],
                 actions[i],
                 env.rewards()[i],
-                &next[i * OBS_DIM..(i + 1) * OBS_DIM],
+                discount,
                 env.dones()[i],
+                &mut |t| dqn.remember(i % robots, t.obs, t.action, t.ret, next_obs, t.discount),
             );
         }
         tally.add_rewards(env.rewards());
