@@ -74,7 +74,8 @@ pub struct TrainArgs {
     /// 1M transitions, one network for the team).
     #[arg(long, default_value = "paper")]
     preset: String,
-    /// Opponent: scripted, random, idle, a frozen team (ppo:DIR, dqn:DIR) or
+    /// Opponent: scripted, a scripted variant (scripted:KEY=VAL,... or
+    /// scripted:FILE.toml), random, idle, a frozen team (ppo:DIR, dqn:DIR) or
     /// self-play[:N] (the learner's own snapshot, refreshed every N transitions).
     #[arg(long, default_value = "scripted")]
     opponent: String,
@@ -127,7 +128,11 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     cfg.matches = a.matches;
     cfg.threads = a.threads;
     cfg.learners = parse_players(&a.learners).map_err(anyhow::Error::msg)?;
-    cfg.teammates = a.teammates;
+    cfg.teammates = a
+        .teammates
+        .parse::<naosoccer_client::PolicyKind>()
+        .map_err(anyhow::Error::msg)?
+        .to_string();
     cfg.opponent = a
         .opponent
         .parse::<OpponentSpec>()

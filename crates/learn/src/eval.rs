@@ -22,9 +22,10 @@ pub enum Side {
 }
 
 impl Side {
-    /// `scripted` | `random` | `idle` | `ppo:DIR` | `dqn:DIR`.
+    /// `scripted` | `scripted:KEY=VAL,...` | `scripted:FILE.toml` | `random`
+    /// | `idle` | `ppo:DIR` | `dqn:DIR` (and the other trained-team specs).
     pub fn parse(spec: &str) -> Result<Side, LearnError> {
-        if spec.contains(':') {
+        if !naosoccer_client::is_builtin_spec(spec) {
             return Ok(Side::Learned(Box::new(LearnedPolicy::load(spec)?)));
         }
         spec.parse::<PolicyKind>()

@@ -58,7 +58,8 @@ impl std::str::FromStr for Algo {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum OpponentSpec {
-    /// A built-in policy by name: `scripted`, `random`, `idle`.
+    /// A built-in policy by spec: `scripted`, `scripted:KEY=VAL,...`,
+    /// `random`, `idle`.
     Builtin(String),
     /// A frozen trained team, `ppo:DIR` or `dqn:DIR`.
     Frozen(String),
@@ -83,9 +84,12 @@ impl std::str::FromStr for OpponentSpec {
         if s.starts_with("ppo:") || s.starts_with("dqn:") {
             return Ok(OpponentSpec::Frozen(s.to_string()));
         }
-        s.parse::<PolicyKind>()
+        // Saved as the spec that spells out a scripted variant's parameters,
+        // so config.json does not depend on a TOML file staying as it was.
+        let kind = s
+            .parse::<PolicyKind>()
             .map_err(|e| format!("{e}; or ppo:DIR, dqn:DIR, self-play[:N]"))?;
-        Ok(OpponentSpec::Builtin(s.to_string()))
+        Ok(OpponentSpec::Builtin(kind.to_string()))
     }
 }
 
