@@ -117,6 +117,9 @@ pub struct TrainArgs {
     /// paper: 1; the team preset: 3).
     #[arg(long)]
     n_step: Option<usize>,
+    /// DQN: control ticks each decision holds its action (1: every tick).
+    #[arg(long)]
+    action_repeat: Option<usize>,
     /// DQN: exploration rate (the paper: 0.3, fixed; the team preset: the
     /// rate its schedule ends at).
     #[arg(long)]
@@ -162,6 +165,10 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     if let Some(n) = a.n_step {
         anyhow::ensure!(n >= 1, "--n-step must be at least 1");
         cfg.dqn.n_step = n;
+    }
+    if let Some(k) = a.action_repeat {
+        anyhow::ensure!(k >= 1, "--action-repeat must be at least 1");
+        cfg.dqn.action_repeat = k;
     }
     if let Some(e) = a.epsilon {
         cfg.dqn.epsilon = e;

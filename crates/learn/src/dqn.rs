@@ -91,6 +91,11 @@ pub struct DqnConfig {
     pub huber: bool,
     /// Gradient-norm clip (0: none, the paper).
     pub max_grad_norm: f64,
+    /// Control ticks each decision holds its action (1: the paper, a
+    /// decision every tick). A held decision is one transition whose reward
+    /// is the discounted sum over its ticks and whose discount is
+    /// `gamma^ticks`; learning steps come once per decision.
+    pub action_repeat: usize,
 }
 
 impl Default for DqnConfig {
@@ -128,6 +133,7 @@ impl DqnConfig {
             n_step: 1,
             huber: false,
             max_grad_norm: 0.0,
+            action_repeat: 1,
         }
     }
 
@@ -153,6 +159,7 @@ impl DqnConfig {
             n_step: 3,
             huber: true,
             max_grad_norm: 10.0,
+            action_repeat: 1,
         }
     }
 
@@ -217,6 +224,73 @@ struct NStepRow {
     discounts: Vec<f32>,
     start: usize,
     len: usize,
+}
+
+/// Decisions that hold their action for several control ticks: each row
+/// keeps the observation it decided on, its action, and the discounted
+/// reward and discount gathered since.
+pub struct Held {
+    repeat: usize,
+    obs: Vec<f32>,
+    actions: Vec<usize>,
+    ret: Vec<f32>,
+    discount: Vec<f32>,
+    ticks: Vec<usize>,
+}
+
+impl Held {
+    pub fn new(rows: usize, repeat: usize) -> Held {
+        Held {
+            repeat: repeat.max(1),
+            obs: vec![0.0; rows * OBS_DIM],
+            actions: vec![0; rows],
+            ret: vec![0.0; rows],
+            discount: vec![1.0; rows],
+            ticks: vec![0; rows],
+        }
+    }
+
+    /// Whether some row has no decision running.
+    pub fn any_free(&self) -> bool {
+        self.ticks.contains(&0)
+    }
+
+    /// Starts a decision on every free row: `obs` and `actions` hold all rows.
+    pub fn start(&mut self, obs: &[f32], actions: &[usize]) {
+        for (i, &a) in actions.iter().enumerate() {
+            if self.ticks[i] == 0 {
+                self.obs[i * OBS_DIM..(i + 1) * OBS_DIM]
+                    .copy_from_slice(&obs[i * OBS_DIM..(i + 1) * OBS_DIM]);
+                self.actions[i] = a;
+                self.ret[i] = 0.0;
+                self.discount[i] = 1.0;
+            }
+        }
+    }
+
+    /// The actions being played, one per row.
+    pub fn actions(&self) -> &[usize] {
+        &self.actions
+    }
+
+    pub fn obs(&self, row: usize) -> &[f32] {
+        &self.obs[row * OBS_DIM..(row + 1) * OBS_DIM]
+    }
+
+    /// One tick of row `row` passed with `reward` and discount `gamma`; when
+    /// its decision is over (held `repeat` ticks, or the episode ended)
+    /// returns its return and discount, and frees the row.
+    pub fn tick(&mut self, row: usize, reward: f32, gamma: f32, done: bool) -> Option<(f32, f32)> {
+        self.ret[row] += self.discount[row] * reward;
+        self.discount[row] *= gamma;
+        self.ticks[row] += 1;
+        if done || self.ticks[row] >= self.repeat {
+            self.ticks[row] = 0;
+            Some((self.ret[row], self.discount[row]))
+        } else {
+            None
+        }
+    }
 }
 
 /// A transition ready for the replay buffer.
@@ -796,6 +870,31 @@ mod tests {
             collect(&mut one, 0, (2.0, 2, 3.0, 0.99, true)),
             [(2.0, 2, 3.0, 0.0)]
         );
+    }
+
+    #[test]
+    fn held_decisions_gather_discounted_rewards_over_their_ticks() {
+        let mut h = Held::new(2, 3);
+        assert!(h.any_free());
+        let obs: Vec<f32> = [marked(1.0), marked(2.0)].concat();
+        h.start(&obs, &[3, 4]);
+        assert_eq!(h.tick(0, 1.0, 0.5, false), None);
+        assert_eq!(h.tick(1, 1.0, 0.5, false), None);
+        assert!(!h.any_free());
+        // Row 1's episode ends on its second tick: 1 + 0.5 * 2.
+        assert_eq!(h.tick(1, 2.0, 0.5, true), Some((2.0, 0.25)));
+        assert_eq!(h.tick(0, 2.0, 0.5, false), None);
+        // Row 0 held three ticks: 1 + 0.5 * 2 + 0.25 * 4, discount 0.125.
+        assert_eq!(h.tick(0, 4.0, 0.5, false), Some((3.0, 0.125)));
+        assert_eq!((h.obs(0)[0], h.actions()[0]), (1.0, 3));
+        // A new decision only where one ended.
+        h.start(&[marked(5.0), marked(6.0)].concat(), &[0, 1]);
+        assert_eq!(h.actions(), [0, 1]);
+        assert_eq!(h.obs(1)[0], 6.0);
+        // One tick per decision is the plain per-tick transition.
+        let mut one = Held::new(1, 1);
+        one.start(&marked(0.0), &[2]);
+        assert_eq!(one.tick(0, 0.7, 0.99, false), Some((0.7, 0.99)));
     }
 
     #[test]

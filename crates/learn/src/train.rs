@@ -20,7 +20,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::dqn::{Dqn, DqnConfig, NStep};
+use crate::dqn::{Dqn, DqnConfig, Held, NStep};
 use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
 use crate::obs::{ObsScale, OBS_DIM, OBS_VERSION};
 use crate::policy::{save_stores, ActMode, LearnedPolicy};
@@ -492,31 +492,42 @@ fn train_dqn(
     let mut out_rows = Vec::new();
     let mut step = 0usize;
     let mut nstep = NStep::new(cfg.dqn.n_step, rows);
-    // Every transition here lasts one control tick.
-    let discount = cfg.dqn.discount(1);
+    // A decision holds its action `action_repeat` ticks (1: every tick).
+    let mut held = Held::new(rows, cfg.dqn.action_repeat);
+    let tick_discount = cfg.dqn.discount(1);
     while transitions < cfg.steps {
-        prev.copy_from_slice(env.observations());
-        let epsilon = cfg.dqn.epsilon_at(transitions);
-        dqn.act(&prev, robots, epsilon, &mut rng, &mut actions);
-        let finished = env.step(&actions)?;
+        let deciding = held.any_free();
+        if deciding {
+            prev.copy_from_slice(env.observations());
+            let epsilon = cfg.dqn.epsilon_at(transitions);
+            dqn.act(&prev, robots, epsilon, &mut rng, &mut actions);
+            held.start(&prev, &actions);
+        }
+        let finished = env.step(held.actions())?;
         let next = env.observations();
         for i in 0..rows {
+            let done = env.dones()[i];
+            let Some((ret, discount)) = held.tick(i, env.rewards()[i], tick_discount, done) else {
+                continue;
+            };
             let next_obs = &next[i * OBS_DIM..(i + 1) * OBS_DIM];
             nstep.push(
                 i,
-                &prev[i * OBS_DIM..(i + 1) * OBS_DIM],
-                actions[i],
-                env.rewards()[i],
+                held.obs(i),
+                held.actions()[i],
+                ret,
                 discount,
-                env.dones()[i],
+                done,
                 &mut |t| dqn.remember(i % robots, t.obs, t.action, t.ret, next_obs, t.discount),
             );
         }
         tally.add_rewards(env.rewards());
         tally.episodes.extend(finished);
-        if let Some(l) = dqn.learn(&mut rng) {
-            loss_sum += l;
-            loss_n += 1;
+        if deciding {
+            if let Some(l) = dqn.learn(&mut rng) {
+                loss_sum += l;
+                loss_n += 1;
+            }
         }
         let before = transitions;
         transitions += rows as u64;
