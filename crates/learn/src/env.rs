@@ -197,8 +197,16 @@ impl Mix {
 }
 
 /// The seed of match `index`'s `episode`-th episode: a splitmix64 mix, so
-/// neighbouring matches and episodes get unrelated streams.
+/// neighbouring matches and episodes get unrelated streams. Its top bit is
+/// always clear: evaluation seeds (`eval::eval_match_seed`) have it set, so
+/// no evaluation replays a training match.
 pub fn episode_seed(seed: u64, index: usize, episode: u64) -> u64 {
+    legacy_episode_seed(seed, index, episode) & !crate::eval::EVAL_SEED_BIT
+}
+
+/// [`episode_seed`] before training and evaluation seeds were separated:
+/// evaluations made then replay with it (`eval --legacy-seeds`).
+pub fn legacy_episode_seed(seed: u64, index: usize, episode: u64) -> u64 {
     let mut z = seed
         ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
         ^ episode.wrapping_mul(0xD1B5_4A32_D192_ED03);

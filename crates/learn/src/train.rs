@@ -20,7 +20,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::dqn::{Dqn, DqnConfig};
+use crate::dqn::{Dqn, DqnConfig, Held, NStep};
 use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
 use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
 use crate::policy::{save_stores, ActMode, Hold, LearnedPolicy};
@@ -59,7 +59,8 @@ impl std::str::FromStr for Algo {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum OpponentSpec {
-    /// A built-in policy by name: `scripted`, `random`, `idle`.
+    /// A built-in policy by spec: `scripted`, `scripted:KEY=VAL,...`,
+    /// `random`, `idle`.
     Builtin(String),
     /// A frozen trained team, `ppo:DIR` or `dqn:DIR`.
     Frozen(String),
@@ -95,10 +96,12 @@ impl std::str::FromStr for OpponentSpec {
         if s.starts_with("ppo:") || s.starts_with("dqn:") {
             return Ok(OpponentSpec::Frozen(s.to_string()));
         }
-        s.parse::<PolicyKind>().map_err(|e| {
+        // Saved as the spec that spells out a scripted variant's parameters,
+        // so config.json does not depend on a TOML file staying as it was.
+        let kind = s.parse::<PolicyKind>().map_err(|e| {
             format!("{e}; or ppo:DIR, dqn:DIR, self-play[:N], curriculum, schedule:...")
         })?;
-        Ok(OpponentSpec::Builtin(s.to_string()))
+        Ok(OpponentSpec::Builtin(kind.to_string()))
     }
 }
 
@@ -1024,26 +1027,43 @@ fn train_dqn(
     let (mut loss_sum, mut loss_n) = (0.0, 0u32);
     let mut out_rows = Vec::new();
     let mut step = 0usize;
+    let mut nstep = NStep::new(cfg.dqn.n_step, rows);
+    // A decision holds its action `action_repeat` ticks (1: every tick).
+    let mut held = Held::new(rows, cfg.dqn.action_repeat);
+    let tick_discount = cfg.dqn.discount(1);
     while transitions < cfg.steps {
-        prev.copy_from_slice(env.observations());
-        dqn.act(&prev, robots, cfg.dqn.epsilon, &mut rng, &mut actions);
-        let finished = env.step(&actions)?;
+        let deciding = held.any_free();
+        if deciding {
+            prev.copy_from_slice(env.observations());
+            let epsilon = cfg.dqn.epsilon_at(transitions);
+            dqn.act(&prev, robots, epsilon, &mut rng, &mut actions);
+            held.start(&prev, &actions);
+        }
+        let finished = env.step(held.actions())?;
         let next = env.observations();
         for i in 0..rows {
-            dqn.remember(
-                i % robots,
-                &prev[i * OBS_DIM..(i + 1) * OBS_DIM],
-                actions[i],
-                env.rewards()[i],
-                &next[i * OBS_DIM..(i + 1) * OBS_DIM],
-                env.dones()[i],
+            let done = env.dones()[i];
+            let Some((ret, discount)) = held.tick(i, env.rewards()[i], tick_discount, done) else {
+                continue;
+            };
+            let next_obs = &next[i * OBS_DIM..(i + 1) * OBS_DIM];
+            nstep.push(
+                i,
+                held.obs(i),
+                held.actions()[i],
+                ret,
+                discount,
+                done,
+                &mut |t| dqn.remember(i % robots, t.obs, t.action, t.ret, next_obs, t.discount),
             );
         }
         tally.add_rewards(env.rewards());
         tally.episodes.extend(finished);
-        if let Some(l) = dqn.learn(&mut rng) {
-            loss_sum += l;
-            loss_n += 1;
+        if deciding {
+            if let Some(l) = dqn.learn(&mut rng) {
+                loss_sum += l;
+                loss_n += 1;
+            }
         }
         let before = transitions;
         transitions += rows as u64;

@@ -50,6 +50,8 @@ mod tests {
             control: Default::default(),
             opponent_control: false,
             reward: 0.0,
+            half: 1,
+            set_play: None,
         }
     }
 
