@@ -88,7 +88,7 @@ struct Slot {
 /// opponent goal (every other robot stands aside, by the own goal line),
 /// the ball at a random spot of the attacking half and each learner within
 /// `robot_radius` of it, facing anywhere. The episode ends with a goal (a
-/// success) or when the match clock runs out.
+/// success) or when the match clock runs out; it is played in one half.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Drill {
     /// Ball x range (metres, the learner's frame: attacking +x).
@@ -357,8 +357,12 @@ impl VecEnv {
     }
 
     /// Plays `drill` episodes instead of matches (`None`: matches); every
-    /// match starts its current episode afresh.
+    /// match starts its current episode afresh. A drill is played in one
+    /// half (a half-time kick-off would put everything back in place).
     pub fn set_drill(&mut self, drill: Option<Drill>) -> Result<(), LearnError> {
+        if drill.is_some() {
+            self.cfg.rules.halves = 1;
+        }
         for slot in &mut self.slots {
             slot.drill = drill;
         }
