@@ -11,7 +11,9 @@
 //! - no lying robot moves unless something hits it: a robot that has lain a
 //!   1.5 s, and that nothing (robot or ball) has touched for 1.5 s,
 //!   stays where it lies, in position and orientation;
-//! - no ball rests on a foot for more than 0.5 s.
+//! - no ball rests on a foot for more than 0.5 s;
+//! - every robot the sim has down as fallen (controller off) is down for the
+//!   referee too, at the end of every tick.
 //!
 //! The geometry is the real one: the URDF's collision primitives placed by
 //! each robot's recorded torso pose, measured with parry (rapier's geometry).
@@ -121,6 +123,7 @@ struct Audit {
     overlaps: Vec<String>,
     lying_moved: Vec<String>,
     ball_on_foot: Vec<String>,
+    fallen_not_down: Vec<String>,
     placements: u64,
     lying_watched_steps: u64,
     max_lying_drift: f32,
@@ -295,6 +298,16 @@ impl Watch {
     /// commands moved must be clear of every other body.
     fn tick(&mut self, a: &mut Audit, parts: &[Part], m: &Match, events: &[Event]) {
         let _ = events; // per-tick checks over the event stream go here
+        for (robot, r) in RobotId::all().zip(&m.sim().snapshot().robots) {
+            if r.fallen && !m.is_down(robot) {
+                a.fallen_not_down.push(format!(
+                    "seed {} tick {}: robot {} fallen in the sim, not down for the referee",
+                    self.seed,
+                    m.tick(),
+                    robot.index()
+                ));
+            }
+        }
         let Some(before) = self.prev else { return };
         let now = Bodies::of(m.sim());
         let r = self.ball_radius;
@@ -422,11 +435,12 @@ fn check(a: &Audit) {
         show("placement overlap", &a.overlaps),
         show("lying robot moved", &a.lying_moved),
         show("ball rests on a foot", &a.ball_on_foot),
+        show("fallen, not down", &a.fallen_not_down),
     ];
     assert_eq!(
         counts,
-        [0, 0, 0, 0],
-        "[ball through, placement overlaps, lying robots moved, balls on a foot]"
+        [0, 0, 0, 0, 0],
+        "[ball through, placement overlaps, lying robots moved, balls on a foot, sim falls the referee missed]"
     );
 }
 
