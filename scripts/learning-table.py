@@ -5,11 +5,12 @@
     ...
     python3 scripts/learning-table.py ppo-1.json ppo-2.json dqn-1.json ...
 
-One row per file (the blue team's figures, mean ± 95% CI over its matches),
-then one row per group pooling the matches of all its files: a group is the
-blue team's name without its trailing seed (`ppo:assets/policies/ppo-seed1`
-and `ppo:assets/policies/ppo-seed2` pool as `ppo:assets/policies/ppo`).
-Standard library only.
+One row per file (the --blue team's figures, mean ± 95% CI over its
+matches, whichever colour it played with --both-sides), then one row per
+group pooling the matches of all its files: a group is the blue team's name
+without its trailing seed (`ppo:assets/policies/ppo-seed1` and
+`ppo:assets/policies/ppo-seed2` pool as `ppo:assets/policies/ppo`). Win
+rates carry their Wilson score 95% interval. Standard library only.
 """
 
 import json
@@ -39,6 +40,27 @@ def mean_ci(xs):
     return m, t95(n - 1) * math.sqrt(var / n)
 
 
+def wilson(k, n, z=1.96):
+    """Wilson score interval of k successes in n trials, as (rate, low, high)."""
+    if n == 0:
+        return float("nan"), float("nan"), float("nan")
+    p = k / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return p, min(max(centre - half, 0.0), p), max(min(centre + half, 1.0), p)
+
+
+def fmt_rate(k, n):
+    p, lo, hi = wilson(k, n)
+    return f"{100 * p:.1f}% [{100 * lo:.1f}, {100 * hi:.1f}]"
+
+
+def sides(r):
+    """'both' when half the matches swapped the sides, else 'blue'."""
+    return "both" if r.get("both_sides") else "blue"
+
+
 def per_match(result):
     """Per-match (blue goals, red goals); control, passes and shots are only
     summarised in the file."""
@@ -50,7 +72,8 @@ def row(name, r):
     fmt = lambda f: f"{b[f]['mean']:.2f} ± {b[f]['ci95']:.2f}"
     return (f"| {name} | {fmt('goals')} | {b['control_rate_percent']['mean']:.1f}% ± "
             f"{b['control_rate_percent']['ci95']:.1f} | {fmt('passes')} | {fmt('shots')} | "
-            f"{b['wins']} / {b['draws']} / {b['losses']} | {r['red']['goals']['mean']:.2f} |")
+            f"{b['wins']} / {b['draws']} / {b['losses']} | {fmt_rate(b['wins'], r['matches'])} | "
+            f"{sides(r)} | {r['red']['goals']['mean']:.2f} |")
 
 
 def main(paths):
@@ -60,9 +83,9 @@ def main(paths):
     for p in paths:
         with open(p) as f:
             results.append((p, json.load(f)))
-    print("| blue team | goals / match | ball control | passes / match | shots / match "
-          "| W / D / L | goals conceded / match |")
-    print("|---|---|---|---|---|---|---|")
+    print("| team | goals / match | ball control | passes / match | shots / match "
+          "| W / D / L | win rate [Wilson 95%] | sides | goals conceded / match |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for _, r in results:
         print(row(r["blue"]["name"], r))
     groups = {}
@@ -71,8 +94,8 @@ def main(paths):
         groups.setdefault(key, []).append(r)
     print()
     print("| team (runs pooled) | matches | goals / match | goals conceded / match "
-          "| ball control (mean of runs) | W / D / L |")
-    print("|---|---|---|---|---|---|")
+          "| ball control (mean of runs) | W / D / L | win rate [Wilson 95%] |")
+    print("|---|---|---|---|---|---|---|")
     for algo, rs in groups.items():
         scores = [s for r in rs for s in per_match(r)]
         gf = mean_ci([float(b) for b, _ in scores])
@@ -83,7 +106,8 @@ def main(paths):
         l_ = sum(b < r_ for b, r_ in scores)
         runs = f"{len(rs)} run{'s' if len(rs) > 1 else ''}"
         print(f"| {algo} ({runs}) | {len(scores)} | {gf[0]:.2f} ± {gf[1]:.2f} | "
-              f"{ga[0]:.2f} ± {ga[1]:.2f} | {ctl[0]:.1f}% ± {ctl[1]:.1f} | {w} / {d} / {l_} |")
+              f"{ga[0]:.2f} ± {ga[1]:.2f} | {ctl[0]:.1f}% ± {ctl[1]:.1f} | {w} / {d} / {l_} | "
+              f"{fmt_rate(w, len(scores))} |")
 
 
 if __name__ == "__main__":

@@ -127,6 +127,125 @@ fn bad_input_gives_clear_errors() {
     let out = naosoccer(&["eval", "--blue", "wizard", "--matches", "1"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown policy"));
+
+    // Scripted variants: unknown keys and bad values, wherever a spec goes.
+    for args in [
+        &["eval", "--blue", "scripted:shot_range=3", "--matches", "1"][..],
+        &[
+            "match",
+            "--red",
+            "scripted:shot_range=3",
+            "--minutes",
+            "0.05",
+        ][..],
+        &[
+            "train",
+            "--algo",
+            "dqn",
+            "--opponent",
+            "scripted:shot_range=3",
+            "--out",
+            "x",
+        ][..],
+    ] {
+        let out = naosoccer(args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("unknown scripted parameter \"shot_range\""),
+            "{args:?}: {err}"
+        );
+    }
+    let out = naosoccer(&["eval", "--blue", "scripted:b_shoot=wide", "--matches", "1"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("b_shoot: \"wide\" is not a number"), "{err}");
+    let out = naosoccer(&[
+        "train", "--algo", "dqn", "--preset", "rainbow", "--out", "x",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("unknown DQN preset"), "{err}");
+}
+
+/// `eval --both-sides` against a shipped scripted variant: each team keeps
+/// its name, half the matches swap the sides, the win rate carries its
+/// Wilson interval, and the seeds are evaluation seeds.
+#[test]
+fn eval_both_sides_reports_each_team_under_its_name() {
+    let variant = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scripted/press.toml");
+    let spec = format!("scripted:{variant}");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "eval",
+            "--blue",
+            &spec,
+            "--red",
+            "random",
+            "--matches",
+            "4",
+            "--minutes",
+            "0.2",
+            "--seed",
+            "5",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let out = naosoccer(&args);
+        assert!(
+            out.status.success(),
+            "eval failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+    };
+    let v = run(&["--both-sides"]);
+    assert_eq!(v["both_sides"], true);
+    assert_eq!(v["seed_scheme"], "eval");
+    assert_eq!(v["swapped"], serde_json::json!([false, true, false, true]));
+    assert_eq!(v["blue"]["name"], spec.as_str());
+    assert_eq!(v["red"]["name"], "random");
+    for team in ["blue", "red"] {
+        let t = &v[team];
+        let (w, d, l) = (
+            t["wins"].as_u64().unwrap(),
+            t["draws"].as_u64().unwrap(),
+            t["losses"].as_u64().unwrap(),
+        );
+        assert_eq!(w + d + l, 4);
+        for side in ["as_blue", "as_red"] {
+            let r = &t[side];
+            let n = r["wins"].as_u64().unwrap()
+                + r["draws"].as_u64().unwrap()
+                + r["losses"].as_u64().unwrap();
+            assert_eq!(n, 2, "{team} {side}");
+        }
+        let rate = &t["win_rate"];
+        let (low, p, high) = (
+            rate["low"].as_f64().unwrap(),
+            rate["rate"].as_f64().unwrap(),
+            rate["high"].as_f64().unwrap(),
+        );
+        assert!((p - w as f64 / 4.0).abs() < 1e-12);
+        assert!(0.0 <= low && low <= p && p <= high && high <= 1.0);
+    }
+    // Scores list the first team's goals first whichever colour it played.
+    let goals: u64 = v["scores"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s[0].as_u64().unwrap())
+        .sum();
+    assert!((v["blue"]["goals"]["mean"].as_f64().unwrap() - goals as f64 / 4.0).abs() < 1e-12);
+    // The matches not swapped are the plain evaluation's.
+    let plain = run(&[]);
+    assert_eq!(plain["both_sides"], false);
+    for i in [0, 2] {
+        assert_eq!(plain["scores"][i], v["scores"][i]);
+    }
+    // Legacy seeds are other matches (the old derivation, kept for replays).
+    let legacy = run(&["--legacy-seeds"]);
+    assert_eq!(legacy["seed_scheme"], "legacy");
 }
 
 /// `naosoccer match` plays a shipped trained team in process and records

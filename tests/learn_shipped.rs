@@ -83,9 +83,10 @@ fn shipped_policies_reproduce_their_documented_evaluation() {
         let seed = doc["seed"].as_u64().unwrap().to_string();
         let minutes = doc["minutes"].as_f64().unwrap().to_string();
         let red = doc["red"]["name"].as_str().unwrap();
-        let got = eval(&[
+        let blue = spec(d);
+        let mut args = vec![
             "--blue",
-            &spec(d),
+            &blue,
             "--red",
             red,
             "--matches",
@@ -94,7 +95,16 @@ fn shipped_policies_reproduce_their_documented_evaluation() {
             &seed,
             "--minutes",
             &minutes,
-        ]);
+        ];
+        // Evaluations made before evaluation seeds had their own derivation
+        // do not name a scheme.
+        if doc["seed_scheme"].as_str().is_none_or(|s| s == "legacy") {
+            args.push("--legacy-seeds");
+        }
+        if doc["both_sides"] == true {
+            args.push("--both-sides");
+        }
+        let got = eval(&args);
         let same = got["scores"] == doc["scores"];
         eprintln!(
             "{}: {}",

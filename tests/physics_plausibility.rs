@@ -8,10 +8,14 @@
 //! - no placement overlaps a body: after each tick, every body the referee's
 //!   commands moved (ball put back, robot reset, stood up, kick-off, set
 //!   play) is clear of every other body;
-//! - no lying robot moves unless something hits it: a robot that has lain a
+//! - no lying robot moves unless something hits it: a robot that has lain
 //!   1.5 s, and that nothing (robot or ball) has touched for 1.5 s,
 //!   stays where it lies, in position and orientation;
 //! - no ball rests on a foot for more than 0.5 s;
+//! - every out is restarted by the set play the rules name (SPL: a kick-in
+//!   over a touch line, over a goal line a corner kick when the defenders
+//!   touched it last and a goal kick otherwise, for the team that did not
+//!   touch it last), with the ball put near the spot the rules name;
 //! - every robot the sim has down as fallen (controller off) is down for the
 //!   referee too, at the end of every tick.
 //!
@@ -22,7 +26,7 @@
 
 use naosoccer::runner::build_policies;
 use naosoccer_client::PolicyKind;
-use naosoccer_proto::{Action, Event, Observation, RobotId, ROBOTS};
+use naosoccer_proto::{Action, Event, Observation, RobotId, SetPlayKind, Team, ROBOTS};
 use naosoccer_referee::{blank_observation, Match, MatchConfig};
 use naosoccer_sim::{BallState, Primitive, RobotModel, RobotState, Sim};
 use rapier3d::math::{Pose, Rot3, Vec3};
@@ -123,7 +127,10 @@ struct Audit {
     overlaps: Vec<String>,
     lying_moved: Vec<String>,
     ball_on_foot: Vec<String>,
+    wrong_restarts: Vec<String>,
     fallen_not_down: Vec<String>,
+    /// Set plays seen, by kind: kick-in, goal kick, corner kick.
+    restarts: [u64; 3],
     placements: u64,
     lying_watched_steps: u64,
     max_lying_drift: f32,
@@ -297,7 +304,8 @@ impl Watch {
     /// After every control tick, with its events: bodies the referee's
     /// commands moved must be clear of every other body.
     fn tick(&mut self, a: &mut Audit, parts: &[Part], m: &Match, events: &[Event]) {
-        let _ = events; // per-tick checks over the event stream go here
+        let Some(before) = self.prev else { return };
+        self.restarts(a, m, &before, events);
         for (robot, r) in RobotId::all().zip(&m.sim().snapshot().robots) {
             if r.fallen && !m.is_down(robot) {
                 a.fallen_not_down.push(format!(
@@ -308,7 +316,6 @@ impl Watch {
                 ));
             }
         }
-        let Some(before) = self.prev else { return };
         let now = Bodies::of(m.sim());
         let r = self.ball_radius;
         let ball_moved = before.ball.pos != now.ball.pos;
@@ -376,6 +383,70 @@ impl Watch {
     }
 }
 
+impl Watch {
+    /// Every `BallOut` is followed, in the same tick, by the set play the
+    /// SPL names for where the ball left (`before`: the bodies after the
+    /// tick's last physics step, before any restart), for the right team,
+    /// with the ball put within 0.3 m of the named spot (nearer spots clear
+    /// of every body are allowed) and inside the field.
+    fn restarts(&self, a: &mut Audit, m: &Match, before: &Bodies, events: &[Event]) {
+        let cfg = m.config();
+        let (hl, hw) = (cfg.sim.field_length / 2.0, cfg.sim.field_width / 2.0);
+        let (inset, depth) = (cfg.rules.ball_inset, cfg.rules.goal_area_depth);
+        let ga = cfg.rules.goal_area_width / 2.0;
+        for (k, e) in events.iter().enumerate() {
+            let Event::BallOut { last_touch, .. } = *e else {
+                continue;
+            };
+            let [x, y, _] = before.ball.pos;
+            let (sx, sy) = (x.signum(), y.signum());
+            let expected = if x.abs() - hl > y.abs() - hw {
+                let defenders = if x < 0.0 { Team::Blue } else { Team::Red };
+                if last_touch == Some(defenders) {
+                    (
+                        SetPlayKind::CornerKick,
+                        defenders.other(),
+                        sx * (hl - inset),
+                        sy * (hw - inset),
+                    )
+                } else {
+                    (SetPlayKind::GoalKick, defenders, sx * (hl - depth), sy * ga)
+                }
+            } else {
+                let team =
+                    last_touch.map_or(if x < 0.0 { Team::Blue } else { Team::Red }, Team::other);
+                (
+                    SetPlayKind::KickIn,
+                    team,
+                    x.clamp(-(hl - inset), hl - inset),
+                    sy * (hw - inset),
+                )
+            };
+            let award = events[k..].iter().find_map(|e| match *e {
+                Event::SetPlay {
+                    play, team, x, y, ..
+                } => Some((play, team, x, y)),
+                _ => None,
+            });
+            let ok = award.is_some_and(|(play, team, ax, ay)| {
+                (play, team) == (expected.0, expected.1)
+                    && (ax - expected.2).hypot(ay - expected.3) <= 0.3
+                    && ax.abs() <= hl
+                    && ay.abs() <= hw
+            });
+            if ok {
+                a.restarts[expected.0.index() - 1] += 1;
+            } else {
+                a.wrong_restarts.push(format!(
+                    "seed {} tick {}: ball out at ({x:.2}, {y:.2}), last touch {last_touch:?}: expected {expected:?}, got {award:?}",
+                    self.seed,
+                    m.tick()
+                ));
+            }
+        }
+    }
+}
+
 /// Plays one whole match of `blue` against `red` under the audit.
 fn audit_match(a: &mut Audit, parts: &[Part], seed: u64, blue: &PolicyKind, red: &PolicyKind) {
     let cfg = MatchConfig::default();
@@ -421,8 +492,8 @@ fn audit_five(first: u64) -> Audit {
 
 fn check(a: &Audit) {
     println!(
-        "{} physics steps, {} placements, {} steps of untouched lying robots (largest drift {:.4} m), longest ball rest on a foot {} steps",
-        a.steps, a.placements, a.lying_watched_steps, a.max_lying_drift, a.max_foot_rest_steps
+        "{} physics steps, {} placements, {} steps of untouched lying robots (largest drift {:.4} m), longest ball rest on a foot {} steps, restarts [kick-in, goal kick, corner kick] {:?}",
+        a.steps, a.placements, a.lying_watched_steps, a.max_lying_drift, a.max_foot_rest_steps, a.restarts
     );
     let show = |what: &str, v: &[String]| {
         for line in v.iter().take(10) {
@@ -435,12 +506,17 @@ fn check(a: &Audit) {
         show("placement overlap", &a.overlaps),
         show("lying robot moved", &a.lying_moved),
         show("ball rests on a foot", &a.ball_on_foot),
+        show("wrong restart", &a.wrong_restarts),
         show("fallen, not down", &a.fallen_not_down),
     ];
     assert_eq!(
         counts,
-        [0, 0, 0, 0, 0],
-        "[ball through, placement overlaps, lying robots moved, balls on a foot, sim falls the referee missed]"
+        [0, 0, 0, 0, 0, 0],
+        "[ball through, placement overlaps, lying robots moved, balls on a foot, wrong restarts, sim falls the referee missed]"
+    );
+    assert!(
+        a.restarts.iter().sum::<u64>() > 0,
+        "five matches with no ball out at all: the restart check saw nothing"
     );
 }
 

@@ -14,7 +14,8 @@ central scheduling). Without --match the clients join the oldest unfinished \
 match whose slots are free. When the match ends the team's statistics are \
 printed and the command exits 0.
 
---policy takes a built-in team (scripted, random, idle) or a trained one: \
+--policy takes a built-in team (scripted, random, idle, or a scripted variant \
+scripted:KEY=VAL,... or scripted:FILE.toml) or a trained one: \
 ppo:DIR or dqn:DIR (a `naosoccer train` run directory, e.g. \
 assets/policies/ppo-paper-seed1) or ppo:DIR/checkpoints/step-N.safetensors. A PPO \
 team samples its actions (seeded by the match seed, so the match is \
@@ -37,7 +38,8 @@ pub struct ClientArgs {
     /// Players to run, comma-separated, 0..=3 (0 keeps goal).
     #[arg(long, value_delimiter = ',', default_value = "0,1,2,3")]
     pub players: Vec<u8>,
-    /// The team's policy: scripted, random, idle, or a trained team ppo:DIR / dqn:DIR.
+    /// The team's policy: scripted, scripted:KEY=VAL,..., scripted:FILE.toml,
+    /// random, idle, or a trained team ppo:DIR / dqn:DIR.
     #[arg(long, value_name = "POLICY", default_value = "scripted")]
     pub policy: String,
     /// One connection for all players instead of one per player.

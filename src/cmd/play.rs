@@ -40,7 +40,9 @@ pub struct MatchArgs {
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Blue's policy, one instance per robot: scripted (the paper's
-    /// rule-based team), random, idle, or a trained team (ppo:DIR, dqn:DIR,
+    /// rule-based team), a scripted variant (scripted:KEY=VAL,... or
+    /// scripted:FILE.toml, e.g. scripted:assets/scripted/press.toml), random,
+    /// idle, or a trained team (ppo:DIR, dqn:DIR,
     /// e.g. ppo:assets/policies/ppo-paper-seed1; docs/LEARNING.md).
     #[arg(long, default_value = "scripted", value_name = "POLICY")]
     blue: String,

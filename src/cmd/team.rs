@@ -1,5 +1,6 @@
 //! A team's policy as the command line names it: a built-in team
-//! (`scripted`, `random`, `idle`) or a trained one (`ppo:DIR`,
+//! (`scripted`, a variant `scripted:KEY=VAL,...` or `scripted:FILE.toml`,
+//! `random`, `idle`) or a trained one (`ppo:DIR`,
 //! `ppo-greedy:DIR`, `dqn:DIR`, `dqn-epsilon:DIR`; docs/LEARNING.md).
 //! `naosoccer match` and `naosoccer client` both take it.
 
@@ -17,7 +18,7 @@ pub enum TeamSpec {
 impl TeamSpec {
     /// `what` names the option in errors (`--policy`, `--blue`).
     pub fn parse(spec: &str, what: &str) -> anyhow::Result<TeamSpec> {
-        if !spec.contains(':') {
+        if naosoccer_client::is_builtin_spec(spec) {
             let kind: PolicyKind = spec.parse().map_err(|e| {
                 anyhow::anyhow!("{what}: {e}, or a trained team such as ppo:DIR or dqn:DIR")
             })?;

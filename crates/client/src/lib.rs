@@ -13,5 +13,5 @@ pub mod policy;
 pub mod robot;
 
 pub use net::{Client, ClientError, Played, Push};
-pub use policy::{ParsePolicyError, Policy, PolicyKind};
+pub use policy::{is_builtin_spec, ParsePolicyError, Policy, PolicyKind};
 pub use robot::{PolicyFactory, TeamPolicy};

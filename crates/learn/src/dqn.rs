@@ -1,9 +1,23 @@
-//! DQN as the paper's Algorithm 1: a 5-layer fully connected Q-network with
-//! ReLU between layers and one Q-value per action, experience replay, a target
-//! network copied every fixed number of gradient steps, MSE loss on
-//! `r + gamma max_a' Q_target(s', a') (1 - done)`, epsilon-greedy exploration.
-//! Per-robot parameters `theta_n` (the paper) or one network shared by the
-//! team, which then tells robots apart by the id one-hot in the observation.
+//! DQN in two presets.
+//!
+//! `paper` is the paper's Algorithm 1: a 5-layer fully connected Q-network
+//! with ReLU between layers and one Q-value per action, experience replay, a
+//! target network copied every fixed number of gradient steps, MSE loss on
+//! `r + gamma max_a' Q_target(s', a') (1 - done)`, a fixed epsilon-greedy
+//! exploration, per-robot parameters `theta_n`.
+//!
+//! `team` is the same learner with what makes DQN work in practice: Double
+//! DQN (the online network picks the next action, the target network values
+//! it), n-step returns, Huber loss, gradient-norm clipping, an epsilon that
+//! falls linearly, and one network shared by the team (which tells robots
+//! apart by the id one-hot in the observation).
+//!
+//! Every transition carries its own discount, `gamma^dt` for a decision that
+//! lasted `dt` control ticks, so the same code serves an MDP in which robots
+//! decide every tick (`dt = 1`) and one in which a decision lasts until the
+//! robot is free again. An n-step return multiplies the discounts of its
+//! steps: `R = r_0 + g_0 r_1 + g_0 g_1 r_2 + ...`, bootstrapped with
+//! `g_0 g_1 ... g_{n-1} Q(s_n, .)`, and with nothing once the episode ended.
 
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -16,12 +30,45 @@ use crate::obs::OBS_DIM;
 use crate::ppo::ACTIONS;
 use crate::LearnError;
 
+/// The DQN hyperparameter sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DqnPreset {
+    /// The paper's Algorithm 1 (the default; the shipped `dqn-seed*` teams).
+    #[default]
+    Paper,
+    /// Double DQN, n-step returns, an epsilon schedule, one shared network.
+    Team,
+}
+
+impl std::str::FromStr for DqnPreset {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "paper" => Ok(DqnPreset::Paper),
+            "team" | "dqn-team" => Ok(DqnPreset::Team),
+            o => Err(format!("unknown DQN preset {o:?} (expected paper or team)")),
+        }
+    }
+}
+
+/// Missing fields take the `paper` values, so configurations written before
+/// a field existed load as the runs that wrote them were trained.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct DqnConfig {
+    pub preset: DqnPreset,
+    /// Discount per control tick; a transition that lasted `dt` ticks is
+    /// discounted by `gamma^dt`.
     pub gamma: f64,
     pub lr: f64,
-    /// Probability of a uniformly random action (the paper keeps it fixed).
+    /// Probability of a uniformly random action once the schedule has run
+    /// out (the paper keeps it fixed); `dqn-epsilon:DIR` plays with it.
     pub epsilon: f64,
+    /// The probability at the first transition; it falls linearly to
+    /// `epsilon` over `epsilon_decay` transitions (0: fixed at `epsilon`).
+    pub epsilon_start: f64,
+    pub epsilon_decay: u64,
     /// Hidden widths: four hidden layers make the paper's five linear layers.
     pub hidden: Vec<usize>,
     /// Transitions each replay buffer keeps.
@@ -35,14 +82,46 @@ pub struct DqnConfig {
     pub updates_per_step: usize,
     /// One network for the team instead of one per robot.
     pub shared: bool,
+    /// Double DQN: the online network chooses the next action, the target
+    /// network values it (van Hasselt et al. 2016).
+    pub double: bool,
+    /// Transitions summed into one return before bootstrapping (1: the paper).
+    pub n_step: usize,
+    /// Huber (smooth L1) loss instead of the paper's MSE.
+    pub huber: bool,
+    /// Gradient-norm clip (0: none, the paper).
+    pub max_grad_norm: f64,
+    /// Control ticks each decision holds its action (1: the paper, a
+    /// decision every tick). A held decision is one transition whose reward
+    /// is the discounted sum over its ticks and whose discount is
+    /// `gamma^ticks`; learning steps come once per decision.
+    pub action_repeat: usize,
 }
 
 impl Default for DqnConfig {
     fn default() -> Self {
+        DqnConfig::paper()
+    }
+}
+
+impl DqnConfig {
+    pub fn preset(p: DqnPreset) -> DqnConfig {
+        match p {
+            DqnPreset::Paper => DqnConfig::paper(),
+            DqnPreset::Team => DqnConfig::team(),
+        }
+    }
+
+    /// The paper's Algorithm 1, with our choices where it names none
+    /// (docs/LEARNING.md).
+    pub fn paper() -> DqnConfig {
         DqnConfig {
+            preset: DqnPreset::Paper,
             gamma: 0.99,
             lr: 1e-3,
             epsilon: 0.3,
+            epsilon_start: 0.3,
+            epsilon_decay: 0,
             hidden: vec![128, 128, 128, 128],
             replay: 100_000,
             batch: 128,
@@ -50,15 +129,251 @@ impl Default for DqnConfig {
             target_every: 1_000,
             updates_per_step: 1,
             shared: false,
+            double: false,
+            n_step: 1,
+            huber: false,
+            max_grad_norm: 0.0,
+            action_repeat: 1,
         }
+    }
+
+    /// Double DQN with 3-step returns, Huber loss, clipped gradients, epsilon
+    /// falling from 1 to 0.05 over the first million transitions, and one
+    /// network for the team fed by all four robots.
+    pub fn team() -> DqnConfig {
+        DqnConfig {
+            preset: DqnPreset::Team,
+            gamma: 0.99,
+            lr: 2.5e-4,
+            epsilon: 0.05,
+            epsilon_start: 1.0,
+            epsilon_decay: 1_000_000,
+            hidden: vec![256, 256],
+            replay: 300_000,
+            batch: 256,
+            warmup: 20_000,
+            target_every: 2_000,
+            updates_per_step: 1,
+            shared: true,
+            double: true,
+            n_step: 3,
+            huber: true,
+            max_grad_norm: 10.0,
+            action_repeat: 1,
+        }
+    }
+
+    /// The exploration rate after `transitions` robot transitions.
+    pub fn epsilon_at(&self, transitions: u64) -> f64 {
+        if self.epsilon_decay == 0 || transitions >= self.epsilon_decay {
+            return self.epsilon;
+        }
+        let left = 1.0 - transitions as f64 / self.epsilon_decay as f64;
+        self.epsilon + (self.epsilon_start - self.epsilon) * left
+    }
+
+    /// The discount of a transition that lasted `dt` control ticks.
+    pub fn discount(&self, dt: u32) -> f32 {
+        self.gamma.powi(dt as i32) as f32
     }
 }
 
-/// The TD target `r + gamma max_a' Q_target(s', a') (1 - done)`;
+/// The paper's TD target `r + gamma max_a' Q_target(s', a') (1 - done)`;
 /// `q_next_target` is `[n, ACTIONS]`.
 pub fn td_target(rewards: &Tensor, q_next_target: &Tensor, dones: &Tensor, gamma: f64) -> Tensor {
     let max_next = q_next_target.max_dim(1, false).0;
     rewards + gamma * max_next * (1.0 - dones)
+}
+
+/// The TD target with a discount per transition: `r + g Q_target(s', a*)`,
+/// where `g` is the transition's bootstrap discount (`gamma^dt`, the product
+/// of its steps' discounts for an n-step return, 0 once the episode ended)
+/// and `a*` is the target network's best action, or with `q_next_online`
+/// (Double DQN) the online network's.
+pub fn td_target_discounted(
+    returns: &Tensor,
+    discounts: &Tensor,
+    q_next_target: &Tensor,
+    q_next_online: Option<&Tensor>,
+) -> Tensor {
+    let next = match q_next_online {
+        Some(online) => {
+            let best = online.argmax(1, true);
+            q_next_target.gather(1, &best, false).squeeze_dim(1)
+        }
+        None => q_next_target.max_dim(1, false).0,
+    };
+    returns + next * discounts
+}
+
+/// Turns each row's stream of one-step transitions into n-step transitions:
+/// once a row holds `n` steps its oldest leaves, carrying the discounted sum
+/// of the `n` rewards and the product of their discounts; when an episode
+/// ends every pending step leaves with the rest of its return and a
+/// bootstrap discount of 0.
+pub struct NStep {
+    n: usize,
+    rows: Vec<NStepRow>,
+}
+
+struct NStepRow {
+    /// Ring of the last `n` observations, actions, rewards and discounts.
+    obs: Vec<f32>,
+    actions: Vec<usize>,
+    rewards: Vec<f32>,
+    discounts: Vec<f32>,
+    start: usize,
+    len: usize,
+}
+
+/// Decisions that hold their action for several control ticks: each row
+/// keeps the observation it decided on, its action, and the discounted
+/// reward and discount gathered since.
+pub struct Held {
+    repeat: usize,
+    obs: Vec<f32>,
+    actions: Vec<usize>,
+    ret: Vec<f32>,
+    discount: Vec<f32>,
+    ticks: Vec<usize>,
+}
+
+impl Held {
+    pub fn new(rows: usize, repeat: usize) -> Held {
+        Held {
+            repeat: repeat.max(1),
+            obs: vec![0.0; rows * OBS_DIM],
+            actions: vec![0; rows],
+            ret: vec![0.0; rows],
+            discount: vec![1.0; rows],
+            ticks: vec![0; rows],
+        }
+    }
+
+    /// Whether some row has no decision running.
+    pub fn any_free(&self) -> bool {
+        self.ticks.contains(&0)
+    }
+
+    /// Starts a decision on every free row: `obs` and `actions` hold all rows.
+    pub fn start(&mut self, obs: &[f32], actions: &[usize]) {
+        for (i, &a) in actions.iter().enumerate() {
+            if self.ticks[i] == 0 {
+                self.obs[i * OBS_DIM..(i + 1) * OBS_DIM]
+                    .copy_from_slice(&obs[i * OBS_DIM..(i + 1) * OBS_DIM]);
+                self.actions[i] = a;
+                self.ret[i] = 0.0;
+                self.discount[i] = 1.0;
+            }
+        }
+    }
+
+    /// The actions being played, one per row.
+    pub fn actions(&self) -> &[usize] {
+        &self.actions
+    }
+
+    pub fn obs(&self, row: usize) -> &[f32] {
+        &self.obs[row * OBS_DIM..(row + 1) * OBS_DIM]
+    }
+
+    /// One tick of row `row` passed with `reward` and discount `gamma`; when
+    /// its decision is over (held `repeat` ticks, or the episode ended)
+    /// returns its return and discount, and frees the row.
+    pub fn tick(&mut self, row: usize, reward: f32, gamma: f32, done: bool) -> Option<(f32, f32)> {
+        self.ret[row] += self.discount[row] * reward;
+        self.discount[row] *= gamma;
+        self.ticks[row] += 1;
+        if done || self.ticks[row] >= self.repeat {
+            self.ticks[row] = 0;
+            Some((self.ret[row], self.discount[row]))
+        } else {
+            None
+        }
+    }
+}
+
+/// A transition ready for the replay buffer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NStepOut<'a> {
+    pub obs: &'a [f32],
+    pub action: usize,
+    /// `r_0 + g_0 r_1 + g_0 g_1 r_2 + ...`
+    pub ret: f32,
+    /// `g_0 g_1 ... g_{k-1}`, or 0 when the episode ended within the k steps.
+    pub discount: f32,
+}
+
+impl NStep {
+    pub fn new(n: usize, rows: usize) -> NStep {
+        let n = n.max(1);
+        NStep {
+            n,
+            rows: (0..rows)
+                .map(|_| NStepRow {
+                    obs: vec![0.0; n * OBS_DIM],
+                    actions: vec![0; n],
+                    rewards: vec![0.0; n],
+                    discounts: vec![0.0; n],
+                    start: 0,
+                    len: 0,
+                })
+                .collect(),
+        }
+    }
+
+    /// Adds row `row`'s step (`obs`, `action`) that earned `reward`, lasted
+    /// with discount `discount` and ended the episode if `done`; calls `emit`
+    /// with each transition that is complete, and the observation to
+    /// bootstrap from (`next_obs`; unused when the discount is 0).
+    #[allow(clippy::too_many_arguments)]
+    pub fn push(
+        &mut self,
+        row: usize,
+        obs: &[f32],
+        action: usize,
+        reward: f32,
+        discount: f32,
+        done: bool,
+        emit: &mut dyn FnMut(NStepOut<'_>),
+    ) {
+        let n = self.n;
+        let r = &mut self.rows[row];
+        let slot = (r.start + r.len) % n;
+        r.obs[slot * OBS_DIM..(slot + 1) * OBS_DIM].copy_from_slice(obs);
+        r.actions[slot] = action;
+        r.rewards[slot] = reward;
+        r.discounts[slot] = discount;
+        r.len += 1;
+        if done {
+            while r.len > 0 {
+                r.emit_front(n, true, emit);
+            }
+            r.start = 0;
+        } else if r.len == n {
+            r.emit_front(n, false, emit);
+        }
+    }
+}
+
+impl NStepRow {
+    fn emit_front(&mut self, n: usize, terminal: bool, emit: &mut dyn FnMut(NStepOut<'_>)) {
+        let (mut ret, mut disc) = (0.0f32, 1.0f32);
+        for j in 0..self.len {
+            let k = (self.start + j) % n;
+            ret += disc * self.rewards[k];
+            disc *= self.discounts[k];
+        }
+        let s = self.start;
+        emit(NStepOut {
+            obs: &self.obs[s * OBS_DIM..(s + 1) * OBS_DIM],
+            action: self.actions[s],
+            ret,
+            discount: if terminal { 0.0 } else { disc },
+        });
+        self.start = (s + 1) % n;
+        self.len -= 1;
+    }
 }
 
 /// A Q-network: `OBS_DIM -> hidden x4 -> ACTIONS`.
@@ -71,10 +386,16 @@ impl QNet {
     /// `name` prefixes the variables (`q0.l0.weight`, ...), so several
     /// networks can share one checkpoint file.
     pub fn new(hidden: &[usize], name: &str) -> QNet {
+        QNet::with_input(OBS_DIM, hidden, name)
+    }
+
+    /// A network reading `input` features (an older observation layout's
+    /// length, for the shipped teams).
+    pub fn with_input(input: usize, hidden: &[usize], name: &str) -> QNet {
         let vs = nn::VarStore::new(tch::Device::Cpu);
         let mlp = Mlp::new(
             &(vs.root() / name),
-            OBS_DIM,
+            input,
             hidden,
             ACTIONS,
             Activation::Relu,
@@ -96,8 +417,10 @@ pub struct Replay {
     obs: Vec<f32>,
     next_obs: Vec<f32>,
     actions: Vec<i64>,
+    /// Returns (the reward, or an n-step sum).
     rewards: Vec<f32>,
-    dones: Vec<f32>,
+    /// Bootstrap discounts: `gamma^dt` (products for n-step), 0 at episode end.
+    discounts: Vec<f32>,
 }
 
 impl Replay {
@@ -110,7 +433,7 @@ impl Replay {
             next_obs: vec![0.0; cap * OBS_DIM],
             actions: vec![0; cap],
             rewards: vec![0.0; cap],
-            dones: vec![0.0; cap],
+            discounts: vec![0.0; cap],
         }
     }
 
@@ -122,18 +445,27 @@ impl Replay {
         self.len == 0
     }
 
-    pub fn push(&mut self, obs: &[f32], action: usize, reward: f32, next_obs: &[f32], done: bool) {
+    /// One transition: `reward` is its (n-step) return and `discount` what
+    /// multiplies `Q(next_obs, .)` in its target (0 when the episode ended).
+    pub fn push(
+        &mut self,
+        obs: &[f32],
+        action: usize,
+        reward: f32,
+        next_obs: &[f32],
+        discount: f32,
+    ) {
         let i = self.next;
         self.obs[i * OBS_DIM..(i + 1) * OBS_DIM].copy_from_slice(obs);
         self.next_obs[i * OBS_DIM..(i + 1) * OBS_DIM].copy_from_slice(next_obs);
         self.actions[i] = action as i64;
         self.rewards[i] = reward;
-        self.dones[i] = f32::from(u8::from(done));
+        self.discounts[i] = discount;
         self.next = (i + 1) % self.cap;
         self.len = (self.len + 1).min(self.cap);
     }
 
-    /// A uniform minibatch: (obs, actions, rewards, next_obs, dones).
+    /// A uniform minibatch: (obs, actions, returns, next_obs, discounts).
     fn sample(
         &self,
         batch: usize,
@@ -151,7 +483,7 @@ impl Replay {
                 .extend_from_slice(&self.next_obs[i * OBS_DIM..(i + 1) * OBS_DIM]);
             scratch.actions.push(self.actions[i]);
             scratch.rewards.push(self.rewards[i]);
-            scratch.dones.push(self.dones[i]);
+            scratch.discounts.push(self.discounts[i]);
         }
         let shape = [batch as i64, OBS_DIM as i64];
         (
@@ -159,7 +491,7 @@ impl Replay {
             Tensor::from_slice(&scratch.actions),
             Tensor::from_slice(&scratch.rewards),
             Tensor::from_slice(&scratch.next_obs).view(shape),
-            Tensor::from_slice(&scratch.dones),
+            Tensor::from_slice(&scratch.discounts),
         )
     }
 }
@@ -170,7 +502,7 @@ struct Scratch {
     next_obs: Vec<f32>,
     actions: Vec<i64>,
     rewards: Vec<f32>,
-    dones: Vec<f32>,
+    discounts: Vec<f32>,
     q: Vec<f32>,
     rows: Vec<f32>,
 }
@@ -181,7 +513,7 @@ impl Scratch {
         self.next_obs.clear();
         self.actions.clear();
         self.rewards.clear();
-        self.dones.clear();
+        self.discounts.clear();
     }
 }
 
@@ -259,7 +591,8 @@ impl Dqn {
         }
     }
 
-    /// Stores one transition of learning robot slot `k`.
+    /// Stores one (n-step) transition of learning robot slot `k`; see
+    /// [`Replay::push`].
     pub fn remember(
         &mut self,
         k: usize,
@@ -267,10 +600,10 @@ impl Dqn {
         action: usize,
         reward: f32,
         next_obs: &[f32],
-        done: bool,
+        discount: f32,
     ) {
         let i = self.net_of(k);
-        self.replays[i].push(obs, action, reward, next_obs, done);
+        self.replays[i].push(obs, action, reward, next_obs, discount);
     }
 
     /// Gradient steps on every network whose buffer is past warm-up; returns
@@ -289,9 +622,20 @@ impl Dqn {
                     .q(&o)
                     .gather(1, &a.unsqueeze(1), false)
                     .squeeze_dim(1);
-                let y = tch::no_grad(|| td_target(&r, &self.targets[i].q(&o2), &d, self.cfg.gamma));
-                let loss = (&q - &y).square().mean(Kind::Float);
-                self.opts[i].backward_step(&loss);
+                let y = tch::no_grad(|| {
+                    let online = self.cfg.double.then(|| self.nets[i].q(&o2));
+                    td_target_discounted(&r, &d, &self.targets[i].q(&o2), online.as_ref())
+                });
+                let loss = if self.cfg.huber {
+                    q.smooth_l1_loss(&y, tch::Reduction::Mean, 1.0)
+                } else {
+                    (&q - &y).square().mean(Kind::Float)
+                };
+                if self.cfg.max_grad_norm > 0.0 {
+                    self.opts[i].backward_step_clip_norm(&loss, self.cfg.max_grad_norm);
+                } else {
+                    self.opts[i].backward_step(&loss);
+                }
                 total += f64::try_from(&loss).unwrap_or(f64::NAN);
                 count += 1;
                 self.grad_steps[i] += 1;
@@ -407,10 +751,185 @@ mod tests {
         let mut r = Replay::new(2);
         let o = [0.0; OBS_DIM];
         for a in 0..3 {
-            r.push(&o, a, a as f32, &o, false);
+            r.push(&o, a, a as f32, &o, 0.99);
         }
         assert_eq!(r.len(), 2);
         assert_eq!(r.actions, vec![2, 1]);
+    }
+
+    fn values(t: &Tensor) -> Vec<f32> {
+        let n = t.numel();
+        let mut v = vec![0.0f32; n];
+        t.copy_data(&mut v, n);
+        v
+    }
+
+    #[test]
+    fn the_paper_target_is_the_discounted_target_with_gamma_until_done() {
+        let r = Tensor::from_slice(&[1.0f32, 0.5, -1.0]);
+        let q = Tensor::from_slice(&[
+            0.0f32, 2.0, 1.0, 0.0, 0.0, -1.0, -3.0, -2.0, -5.0, -4.0, 10.0, 0.0, 0.0, 0.0, 0.0,
+        ])
+        .view([3, 5]);
+        let d = Tensor::from_slice(&[0.0f32, 0.0, 1.0]);
+        let g = Tensor::from_slice(&[0.99f32, 0.99, 0.0]);
+        assert_eq!(
+            values(&td_target(&r, &q, &d, 0.99)),
+            values(&td_target_discounted(&r, &g, &q, None))
+        );
+    }
+
+    #[test]
+    fn double_dqn_values_the_online_choice_with_the_target_network() {
+        let r = Tensor::from_slice(&[1.0f32, 0.0, 2.0]);
+        // Per-transition discounts: gamma^dt for dt = 1, 3 and a finished episode.
+        let g = Tensor::from_slice(&[0.9f32, 0.729, 0.0]);
+        let target = Tensor::from_slice(&[
+            5.0f32, 1.0, 0.0, 0.0, 0.0, // max 5 at action 0
+            0.0, 0.0, 7.0, 2.0, 0.0, // max 7 at action 2
+            9.0, 9.0, 9.0, 9.0, 9.0,
+        ])
+        .view([3, 5]);
+        let online = Tensor::from_slice(&[
+            0.0f32, 3.0, 0.0, 0.0, 0.0, // picks action 1
+            0.0, 0.0, 0.0, 4.0, 0.0, // picks action 3
+            1.0, 0.0, 0.0, 0.0, 0.0,
+        ])
+        .view([3, 5]);
+        let y = values(&td_target_discounted(&r, &g, &target, Some(&online)));
+        // Double: target's value of the online argmax, not the target's max.
+        let expected = [1.0 + 0.9 * 1.0, 0.729 * 2.0, 2.0];
+        for (a, b) in y.iter().zip(expected) {
+            assert!((a - b).abs() < 1e-6, "{y:?} vs {expected:?}");
+        }
+        let plain = values(&td_target_discounted(&r, &g, &target, None));
+        let expected = [1.0 + 0.9 * 5.0, 0.729 * 7.0, 2.0];
+        for (a, b) in plain.iter().zip(expected) {
+            assert!((a - b).abs() < 1e-6, "{plain:?} vs {expected:?}");
+        }
+    }
+
+    /// Obs rows marked by their first feature.
+    fn marked(x: f32) -> Vec<f32> {
+        let mut o = vec![0.0; OBS_DIM];
+        o[0] = x;
+        o
+    }
+
+    fn collect(
+        ns: &mut NStep,
+        row: usize,
+        step: (f32, usize, f32, f32, bool),
+    ) -> Vec<(f32, usize, f32, f32)> {
+        let mut out = Vec::new();
+        ns.push(
+            row,
+            &marked(step.0),
+            step.1,
+            step.2,
+            step.3,
+            step.4,
+            &mut |t| out.push((t.obs[0], t.action, t.ret, t.discount)),
+        );
+        out
+    }
+
+    #[test]
+    fn n_step_returns_multiply_varying_discounts_and_stop_at_the_episode_end() {
+        let mut ns = NStep::new(3, 2);
+        // Row 0: steps with discounts 0.9, 0.5, 0.8 (decisions of unequal length).
+        assert!(collect(&mut ns, 0, (10.0, 1, 1.0, 0.9, false)).is_empty());
+        assert!(collect(&mut ns, 0, (11.0, 2, 2.0, 0.5, false)).is_empty());
+        // Row 1 is independent of row 0.
+        assert!(collect(&mut ns, 1, (50.0, 0, 100.0, 0.1, false)).is_empty());
+        let out = collect(&mut ns, 0, (12.0, 3, 4.0, 0.8, false));
+        // R = 1 + 0.9*2 + 0.9*0.5*4 = 4.6, bootstrap discount 0.9*0.5*0.8 = 0.36.
+        assert_eq!(out.len(), 1);
+        let (o, a, ret, disc) = out[0];
+        assert_eq!((o, a), (10.0, 1));
+        assert!(
+            (ret - 4.6).abs() < 1e-6 && (disc - 0.36).abs() < 1e-6,
+            "{out:?}"
+        );
+        // The episode ends: the three pending steps leave with what is left
+        // of their returns and nothing to bootstrap.
+        let out = collect(&mut ns, 0, (13.0, 4, 8.0, 0.7, true));
+        assert_eq!(out.len(), 3, "{out:?}");
+        let expected = [
+            (11.0, 2, 2.0 + 0.5 * 4.0 + 0.5 * 0.8 * 8.0),
+            (12.0, 3, 4.0 + 0.8 * 8.0),
+            (13.0, 4, 8.0),
+        ];
+        for ((o, a, ret, disc), (eo, ea, er)) in out.iter().zip(expected) {
+            assert_eq!((*o, *a, *disc), (eo, ea, 0.0));
+            assert!((ret - er).abs() < 1e-5, "{out:?}");
+        }
+        // A new episode starts empty.
+        assert!(collect(&mut ns, 0, (20.0, 0, 1.0, 0.9, false)).is_empty());
+        // One-step returns are the transitions themselves.
+        let mut one = NStep::new(1, 1);
+        assert_eq!(
+            collect(&mut one, 0, (1.0, 2, 3.0, 0.99, false)),
+            [(1.0, 2, 3.0, 0.99)]
+        );
+        assert_eq!(
+            collect(&mut one, 0, (2.0, 2, 3.0, 0.99, true)),
+            [(2.0, 2, 3.0, 0.0)]
+        );
+    }
+
+    #[test]
+    fn held_decisions_gather_discounted_rewards_over_their_ticks() {
+        let mut h = Held::new(2, 3);
+        assert!(h.any_free());
+        let obs: Vec<f32> = [marked(1.0), marked(2.0)].concat();
+        h.start(&obs, &[3, 4]);
+        assert_eq!(h.tick(0, 1.0, 0.5, false), None);
+        assert_eq!(h.tick(1, 1.0, 0.5, false), None);
+        assert!(!h.any_free());
+        // Row 1's episode ends on its second tick: 1 + 0.5 * 2.
+        assert_eq!(h.tick(1, 2.0, 0.5, true), Some((2.0, 0.25)));
+        assert_eq!(h.tick(0, 2.0, 0.5, false), None);
+        // Row 0 held three ticks: 1 + 0.5 * 2 + 0.25 * 4, discount 0.125.
+        assert_eq!(h.tick(0, 4.0, 0.5, false), Some((3.0, 0.125)));
+        assert_eq!((h.obs(0)[0], h.actions()[0]), (1.0, 3));
+        // A new decision only where one ended.
+        h.start(&[marked(5.0), marked(6.0)].concat(), &[0, 1]);
+        assert_eq!(h.actions(), [0, 1]);
+        assert_eq!(h.obs(1)[0], 6.0);
+        // One tick per decision is the plain per-tick transition.
+        let mut one = Held::new(1, 1);
+        one.start(&marked(0.0), &[2]);
+        assert_eq!(one.tick(0, 0.7, 0.99, false), Some((0.7, 0.99)));
+    }
+
+    #[test]
+    fn epsilon_falls_linearly_then_stays() {
+        let mut c = DqnConfig::team();
+        c.epsilon_start = 1.0;
+        c.epsilon = 0.1;
+        c.epsilon_decay = 1000;
+        assert_eq!(c.epsilon_at(0), 1.0);
+        assert!((c.epsilon_at(500) - 0.55).abs() < 1e-12);
+        assert!((c.epsilon_at(900) - 0.19).abs() < 1e-12);
+        assert_eq!(c.epsilon_at(1000), 0.1);
+        assert_eq!(c.epsilon_at(10_000_000), 0.1);
+        // The paper's is fixed.
+        let p = DqnConfig::paper();
+        assert_eq!((p.epsilon_at(0), p.epsilon_at(5_000_000)), (0.3, 0.3));
+        assert!((DqnConfig::team().discount(3) - 0.99f32.powi(3)).abs() < 1e-7);
+    }
+
+    #[test]
+    fn configurations_without_the_new_fields_load_as_the_paper() {
+        // A DQN section as the shipped dqn-seed* runs wrote it.
+        let old = r#"{"gamma":0.99,"lr":0.001,"epsilon":0.3,"hidden":[128,128,128,128],
+            "replay":100000,"batch":128,"warmup":1000,"target_every":1000,
+            "updates_per_step":1,"shared":false}"#;
+        let c: DqnConfig = serde_json::from_str(old).unwrap();
+        assert_eq!(c, DqnConfig::paper());
+        assert_eq!("team".parse::<DqnPreset>(), Ok(DqnPreset::Team));
+        assert!("rainbow".parse::<DqnPreset>().is_err());
     }
 
     #[test]

@@ -1,7 +1,13 @@
 //! Evaluation: many whole matches between two teams, each a built-in policy
 //! or a trained network, and the paper's Table I (average goals, ball-control
 //! rate, average passes) plus shots and win/draw/loss, with 95% confidence
-//! intervals over matches.
+//! intervals over matches and a Wilson interval on the win rate.
+//!
+//! Optionally half the matches swap the sides, and each team is still
+//! reported under its own name. Match seeds come from their own derivation
+//! ([`eval_match_seed`]): they have the top bit set and training seeds
+//! (`env::episode_seed`) have it clear, so an evaluation never replays a
+//! match a training run saw.
 //!
 //! Matches run side by side; a trained team decides for all its robots in all
 //! matches in one forward pass per tick.
@@ -10,9 +16,8 @@ use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::{Action, MatchStats, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 
-use crate::env::episode_seed;
-use crate::obs::OBS_DIM;
-use crate::policy::{sample_uniform, LearnedPolicy};
+use crate::env::legacy_episode_seed;
+use crate::policy::LearnedPolicy;
 use crate::LearnError;
 
 /// One side of an evaluation.
@@ -22,9 +27,10 @@ pub enum Side {
 }
 
 impl Side {
-    /// `scripted` | `random` | `idle` | `ppo:DIR` | `dqn:DIR`.
+    /// `scripted` | `scripted:KEY=VAL,...` | `scripted:FILE.toml` | `random`
+    /// | `idle` | `ppo:DIR` | `dqn:DIR` (and the other trained-team specs).
     pub fn parse(spec: &str) -> Result<Side, LearnError> {
-        if spec.contains(':') {
+        if !naosoccer_client::is_builtin_spec(spec) {
             return Ok(Side::Learned(Box::new(LearnedPolicy::load(spec)?)));
         }
         spec.parse::<PolicyKind>()
@@ -36,13 +42,99 @@ impl Side {
     }
 }
 
+/// How evaluation matches get their seeds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SeedScheme {
+    /// [`eval_match_seed`]: never a training match's seed.
+    #[default]
+    Eval,
+    /// `env::legacy_episode_seed(seed, i, 0)`, the seed of training match
+    /// `i`'s first episode before the two were separated: it replays
+    /// evaluations made then.
+    Legacy,
+}
+
+impl SeedScheme {
+    pub fn name(self) -> &'static str {
+        match self {
+            SeedScheme::Eval => "eval",
+            SeedScheme::Legacy => "legacy",
+        }
+    }
+
+    pub fn match_seed(self, seed: u64, index: usize) -> u64 {
+        match self {
+            SeedScheme::Eval => eval_match_seed(seed, index),
+            SeedScheme::Legacy => legacy_episode_seed(seed, index, 0),
+        }
+    }
+}
+
+/// The bit that tells evaluation seeds (set) from training seeds
+/// (`env::episode_seed`, clear).
+pub const EVAL_SEED_BIT: u64 = 1 << 63;
+
+/// The seed of evaluation match `index` under `--seed seed`: a splitmix64
+/// mix of its own (another stream constant than training's), with the top
+/// bit set. Training seeds have it clear, so an evaluation never plays a
+/// match any training run played, whatever the two `--seed`s.
+pub fn eval_match_seed(seed: u64, index: usize) -> u64 {
+    let mut z = (seed ^ 0x5EED_E7A1_0000_0000).wrapping_add(
+        (index as u64)
+            .wrapping_add(1)
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15),
+    );
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    (z ^ (z >> 31)) | EVAL_SEED_BIT
+}
+
+/// How an evaluation is played.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct EvalPlan {
+    pub matches: usize,
+    pub seed: u64,
+    /// Odd-numbered matches swap the sides: the first team plays red.
+    pub both_sides: bool,
+    pub seeds: SeedScheme,
+}
+
+impl EvalPlan {
+    /// Whether match `i` has the first team playing red.
+    pub fn swapped(&self, i: usize) -> bool {
+        self.both_sides && i % 2 == 1
+    }
+}
+
 /// One finished match.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MatchResult {
     pub seed: u64,
+    /// By colour: (blue, red).
     pub score: (u32, u32),
     pub stats: MatchStats,
     pub state_hash: u64,
+    /// The first team (`--blue`) played red.
+    pub swapped: bool,
+}
+
+impl MatchResult {
+    /// The colour the first team (`first`: true) or the second played.
+    pub fn team_of(&self, first: bool) -> Team {
+        if first != self.swapped {
+            Team::Blue
+        } else {
+            Team::Red
+        }
+    }
+
+    /// Goals of the first team (`first`: true) or the second.
+    pub fn goals_of(&self, first: bool) -> u32 {
+        match self.team_of(first) {
+            Team::Blue => self.score.0,
+            Team::Red => self.score.1,
+        }
+    }
 }
 
 struct Slot {
@@ -50,28 +142,30 @@ struct Slot {
     obs: Vec<Observation>,
     policies: Vec<Option<Box<dyn Policy>>>,
     decided: [Action; ROBOTS],
+    swapped: bool,
 }
 
-/// Plays `matches` whole matches, blue against red; match `i` has seed
-/// `episode_seed(seed, i, 0)`.
+/// Plays the matches of `plan` between `first` and `second`: match `i` has
+/// seed `plan.seeds.match_seed(plan.seed, i)`, and `first` plays blue unless
+/// `plan.swapped(i)`.
 pub fn play_matches(
     cfg: &MatchConfig,
-    blue: &mut Side,
-    red: &mut Side,
-    matches: usize,
-    seed: u64,
+    first: &mut Side,
+    second: &mut Side,
+    plan: &EvalPlan,
     threads: usize,
 ) -> Result<Vec<MatchResult>, LearnError> {
-    let mut slots = Vec::with_capacity(matches);
-    for i in 0..matches {
-        let m = Match::new(cfg, episode_seed(seed, i, 0))?;
+    let mut slots = Vec::with_capacity(plan.matches);
+    for i in 0..plan.matches {
+        let m = Match::new(cfg, plan.seeds.match_seed(plan.seed, i))?;
         let s = m.seed();
+        let swapped = plan.swapped(i);
         let policies = RobotId::all()
             .map(|r| {
-                let side = if r.team() == Team::Blue {
-                    &*blue
+                let side = if (r.team() == Team::Blue) != swapped {
+                    &*first
                 } else {
-                    &*red
+                    &*second
                 };
                 match side {
                     Side::Builtin(k) => Some(k.build(s, r)),
@@ -85,17 +179,15 @@ pub fn play_matches(
                 .collect(),
             policies,
             decided: [Action::Stay; ROBOTS],
+            swapped,
             m,
         };
         observe_all(&mut slot);
         slots.push(slot);
     }
-    let mut feats = Vec::new();
-    let mut players = Vec::new();
-    let mut uniforms = Vec::new();
     let mut acts = Vec::new();
     while slots.iter().any(|s| !s.m.is_finished()) {
-        for (team, side) in [(Team::Blue, &mut *blue), (Team::Red, &mut *red)] {
+        for (is_first, side) in [(true, &mut *first), (false, &mut *second)] {
             let Side::Learned(policy) = side else {
                 continue;
             };
@@ -103,23 +195,23 @@ pub fn play_matches(
                 .filter(|&i| !slots[i].m.is_finished())
                 .collect();
             let n = live.len() * PLAYERS_PER_TEAM;
-            feats.resize(n * OBS_DIM, 0.0);
-            players.clear();
-            uniforms.clear();
             acts.resize(n, 0usize);
-            let scale = policy.scale();
+            // Each match's team as one policy playing that match would see
+            // it: draws keyed by (match seed, team, player, tick), and the
+            // decision-level MDP's per-robot holds kept by the policy.
+            let teams: Vec<(u64, &[Observation])> = live
+                .iter()
+                .map(|&i| {
+                    let base = team_of(&slots[i], is_first).index() * PLAYERS_PER_TEAM;
+                    (
+                        slots[i].m.seed(),
+                        &slots[i].obs[base..base + PLAYERS_PER_TEAM],
+                    )
+                })
+                .collect();
+            policy.act_matches(&teams, &mut acts);
             for (j, &i) in live.iter().enumerate() {
-                for p in 0..PLAYERS_PER_TEAM {
-                    let row = j * PLAYERS_PER_TEAM + p;
-                    let obs = &slots[i].obs[team.index() * PLAYERS_PER_TEAM + p];
-                    scale.encode(obs, &mut feats[row * OBS_DIM..(row + 1) * OBS_DIM]);
-                    players.push(p);
-                    // Keyed as a policy playing this one match would key it.
-                    uniforms.push(sample_uniform(slots[i].m.seed(), team.index(), p, obs.tick));
-                }
-            }
-            policy.act_rows_keyed(&feats, &players, &uniforms, &mut acts);
-            for (j, &i) in live.iter().enumerate() {
+                let team = team_of(&slots[i], is_first);
                 for p in 0..PLAYERS_PER_TEAM {
                     let a =
                         Action::from_index(acts[j * PLAYERS_PER_TEAM + p]).unwrap_or(Action::Stay);
@@ -146,8 +238,17 @@ pub fn play_matches(
             score: s.m.score(),
             stats: s.m.stats(),
             state_hash: s.m.state_hash(),
+            swapped: s.swapped,
         })
         .collect())
+}
+
+fn team_of(slot: &Slot, first: bool) -> Team {
+    if first != slot.swapped {
+        Team::Blue
+    } else {
+        Team::Red
+    }
 }
 
 fn observe_all(slot: &mut Slot) {
@@ -235,6 +336,74 @@ impl std::fmt::Display for Estimate {
     }
 }
 
+/// A proportion with its Wilson score 95% interval.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rate {
+    pub successes: usize,
+    pub n: usize,
+    pub rate: f64,
+    pub low: f64,
+    pub high: f64,
+}
+
+impl Rate {
+    /// `successes` of `n`, with the Wilson interval at z = 1.96: unlike the
+    /// normal approximation it stays inside [0, 1] and is not empty at 0 or
+    /// `n` successes.
+    pub fn wilson(successes: usize, n: usize) -> Rate {
+        if n == 0 {
+            return Rate {
+                successes,
+                n,
+                rate: f64::NAN,
+                low: f64::NAN,
+                high: f64::NAN,
+            };
+        }
+        let z = 1.96f64;
+        let nf = n as f64;
+        let p = successes as f64 / nf;
+        let denom = 1.0 + z * z / nf;
+        let centre = (p + z * z / (2.0 * nf)) / denom;
+        let half = z * (p * (1.0 - p) / nf + z * z / (4.0 * nf * nf)).sqrt() / denom;
+        Rate {
+            successes,
+            n,
+            rate: p,
+            // The interval holds p; at 0 or n successes rounding could put
+            // the bound a hair inside it.
+            low: (centre - half).clamp(0.0, p),
+            high: (centre + half).clamp(p, 1.0),
+        }
+    }
+}
+
+impl std::fmt::Display for Rate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:.1} [{:.1}, {:.1}]",
+            100.0 * self.rate,
+            100.0 * self.low,
+            100.0 * self.high
+        )
+    }
+}
+
+/// Wins, draws and losses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Record {
+    pub wins: usize,
+    pub draws: usize,
+    pub losses: usize,
+}
+
+impl Record {
+    pub fn matches(&self) -> usize {
+        self.wins + self.draws + self.losses
+    }
+}
+
 /// One team's row of the table.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TeamSummary {
@@ -247,62 +416,96 @@ pub struct TeamSummary {
     pub wins: usize,
     pub draws: usize,
     pub losses: usize,
+    /// Wins over all matches (a draw is not a win), Wilson 95%.
+    pub win_rate: Rate,
+    /// The matches it played as blue and as red.
+    pub as_blue: Record,
+    pub as_red: Record,
 }
 
-/// Table I over a set of matches, for both teams.
-pub fn summarise(results: &[MatchResult], blue_name: &str, red_name: &str) -> [TeamSummary; 2] {
-    Team::BOTH.map(|team| {
+/// Table I over a set of matches, for the first team (`--blue`) and the
+/// second, each under its own name whichever colour it played.
+pub fn summarise(results: &[MatchResult], first_name: &str, second_name: &str) -> [TeamSummary; 2] {
+    [(true, first_name), (false, second_name)].map(|(first, name)| {
         let col = |f: &dyn Fn(&MatchResult) -> f64| {
             Estimate::of(&results.iter().map(f).collect::<Vec<_>>())
         };
-        let mine = |r: &MatchResult| {
-            if team == Team::Blue {
-                r.score.0
+        let (mut as_blue, mut as_red) = (Record::default(), Record::default());
+        for r in results {
+            let rec = if r.team_of(first) == Team::Blue {
+                &mut as_blue
             } else {
-                r.score.1
+                &mut as_red
+            };
+            match r.goals_of(first).cmp(&r.goals_of(!first)) {
+                std::cmp::Ordering::Greater => rec.wins += 1,
+                std::cmp::Ordering::Equal => rec.draws += 1,
+                std::cmp::Ordering::Less => rec.losses += 1,
             }
-        };
-        let theirs = |r: &MatchResult| {
-            if team == Team::Blue {
-                r.score.1
-            } else {
-                r.score.0
-            }
-        };
+        }
+        let wins = as_blue.wins + as_red.wins;
         TeamSummary {
-            name: if team == Team::Blue {
-                blue_name
-            } else {
-                red_name
-            }
-            .to_string(),
-            goals: col(&|r| f64::from(mine(r))),
-            control_rate: col(&|r| 100.0 * r.stats.team(team).control_rate),
-            passes: col(&|r| f64::from(r.stats.team(team).passes)),
-            shots: col(&|r| f64::from(r.stats.team(team).shots)),
-            wins: results.iter().filter(|r| mine(r) > theirs(r)).count(),
-            draws: results.iter().filter(|r| mine(r) == theirs(r)).count(),
-            losses: results.iter().filter(|r| mine(r) < theirs(r)).count(),
+            name: name.to_string(),
+            goals: col(&|r| f64::from(r.goals_of(first))),
+            control_rate: col(&|r| 100.0 * r.stats.team(r.team_of(first)).control_rate),
+            passes: col(&|r| f64::from(r.stats.team(r.team_of(first)).passes)),
+            shots: col(&|r| f64::from(r.stats.team(r.team_of(first)).shots)),
+            wins,
+            draws: as_blue.draws + as_red.draws,
+            losses: as_blue.losses + as_red.losses,
+            win_rate: Rate::wilson(wins, results.len()),
+            as_blue,
+            as_red,
         }
     })
 }
 
 /// The table as text, one row per team.
 pub fn format_table(rows: &[TeamSummary], matches: usize) -> String {
+    let both = rows
+        .iter()
+        .any(|r| r.as_red.matches() > 0 && r.as_blue.matches() > 0);
     let mut s = format!(
-        "{matches} matches, mean ± 95% CI\n{:<28} {:>14} {:>18} {:>16} {:>16} {:>11}\n",
-        "team", "average goals", "ball control %", "average passes", "average shots", "W/D/L"
+        "{matches} matches{}, mean ± 95% CI; win % with its Wilson 95% interval\n\
+         {:<28} {:>14} {:>18} {:>16} {:>16} {:>11} {:>20}\n",
+        if both {
+            ", half with the sides swapped"
+        } else {
+            ""
+        },
+        "team",
+        "average goals",
+        "ball control %",
+        "average passes",
+        "average shots",
+        "W/D/L",
+        "win %"
     );
     for r in rows {
         s.push_str(&format!(
-            "{:<28} {:>14} {:>18} {:>16} {:>16} {:>11}\n",
+            "{:<28} {:>14} {:>18} {:>16} {:>16} {:>11} {:>20}\n",
             r.name,
             format!("{:.2}", r.goals),
             format!("{:.1}", r.control_rate),
             format!("{:.2}", r.passes),
             format!("{:.2}", r.shots),
-            format!("{}/{}/{}", r.wins, r.draws, r.losses)
+            format!("{}/{}/{}", r.wins, r.draws, r.losses),
+            r.win_rate.to_string(),
         ));
+    }
+    if both {
+        for r in rows {
+            s.push_str(&format!(
+                "{}: as blue {}/{}/{}, as red {}/{}/{}\n",
+                r.name,
+                r.as_blue.wins,
+                r.as_blue.draws,
+                r.as_blue.losses,
+                r.as_red.wins,
+                r.as_red.draws,
+                r.as_red.losses
+            ));
+        }
     }
     s
 }
@@ -310,6 +513,117 @@ pub fn format_table(rows: &[TeamSummary], matches: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn wilson_interval_matches_hand_computed_values() {
+        // Values from the closed form, z = 1.96.
+        for (k, n, low, high) in [
+            (0, 10, 0.0, 0.277_540),
+            (5, 10, 0.236_590, 0.763_410),
+            (8, 10, 0.490_157, 0.943_319),
+            (100, 100, 0.963_005, 1.0),
+            (80, 100, 0.711_169, 0.866_634),
+        ] {
+            let r = Rate::wilson(k, n);
+            assert!(
+                (r.low - low).abs() < 1e-5 && (r.high - high).abs() < 1e-5,
+                "{k}/{n}: {r:?}"
+            );
+            assert!(r.low <= r.rate && r.rate <= r.high);
+        }
+        assert!(Rate::wilson(0, 0).rate.is_nan());
+        assert_eq!(Rate::wilson(8, 10).to_string(), "80.0 [49.0, 94.3]");
+    }
+
+    #[test]
+    fn evaluation_seeds_never_meet_training_seeds() {
+        use crate::env::episode_seed;
+        let mut eval = std::collections::BTreeSet::new();
+        for seed in 0..8 {
+            for i in 0..200 {
+                let s = eval_match_seed(seed, i);
+                assert_ne!(s & EVAL_SEED_BIT, 0);
+                eval.insert(s);
+                for episode in 0..4 {
+                    assert_eq!(episode_seed(seed, i, episode) & EVAL_SEED_BIT, 0);
+                }
+            }
+        }
+        // Distinct across seeds and matches.
+        assert_eq!(eval.len(), 8 * 200);
+        // The legacy scheme is the old training derivation, top bit and all.
+        assert_eq!(
+            SeedScheme::Legacy.match_seed(7, 3),
+            legacy_episode_seed(7, 3, 0)
+        );
+        assert_eq!(
+            episode_seed(7, 3, 0),
+            legacy_episode_seed(7, 3, 0) & !EVAL_SEED_BIT
+        );
+    }
+
+    fn short_config() -> MatchConfig {
+        let mut cfg = MatchConfig::default();
+        cfg.minutes = 0.25;
+        cfg
+    }
+
+    #[test]
+    fn both_sides_swaps_every_other_match_and_keeps_each_team_under_its_name() {
+        let cfg = short_config();
+        let plan = EvalPlan {
+            matches: 4,
+            seed: 3,
+            both_sides: true,
+            seeds: SeedScheme::Eval,
+        };
+        let scripted = || Side::Builtin(PolicyKind::Scripted);
+        let random = || Side::Builtin(PolicyKind::Random);
+        let both = play_matches(&cfg, &mut scripted(), &mut random(), &plan, 1).unwrap();
+        assert_eq!(
+            both.iter().map(|r| r.swapped).collect::<Vec<_>>(),
+            [false, true, false, true]
+        );
+        // A swapped match is the match with the teams named the other way
+        // round: same seed, same play, bit for bit.
+        let plain = EvalPlan {
+            both_sides: false,
+            ..plan
+        };
+        let reversed = play_matches(&cfg, &mut random(), &mut scripted(), &plain, 1).unwrap();
+        let straight = play_matches(&cfg, &mut scripted(), &mut random(), &plain, 1).unwrap();
+        for i in 0..4 {
+            let expect = if i % 2 == 1 {
+                &reversed[i]
+            } else {
+                &straight[i]
+            };
+            assert_eq!(both[i].seed, expect.seed);
+            assert_eq!(both[i].score, expect.score);
+            assert_eq!(both[i].state_hash, expect.state_hash);
+        }
+        let [first, second] = summarise(&both, "scripted", "random");
+        assert_eq!(
+            (first.name.as_str(), second.name.as_str()),
+            ("scripted", "random")
+        );
+        assert_eq!(first.as_blue.matches(), 2);
+        assert_eq!(first.as_red.matches(), 2);
+        let goals: u32 = both.iter().map(|r| r.goals_of(true)).sum();
+        let by_colour: u32 = (0..4)
+            .map(|i| {
+                if i % 2 == 1 {
+                    reversed[i].score.1
+                } else {
+                    straight[i].score.0
+                }
+            })
+            .sum();
+        assert_eq!(goals, by_colour);
+        assert!((first.goals.mean - f64::from(goals) / 4.0).abs() < 1e-12);
+        assert_eq!(first.wins, second.losses);
+        assert_eq!(first.win_rate, Rate::wilson(first.wins, 4));
+    }
 
     #[test]
     fn confidence_interval_uses_student_t() {

@@ -17,12 +17,18 @@
 //! robot, as the server and runner build them, is deterministic.
 
 use naosoccer_proto::{Action, Observation, RobotObs, PLAYERS_PER_TEAM};
+use serde::{Deserialize, Serialize};
 
 use super::Policy;
 
 /// The scripted team's parameters. Pitch sizes and kick reach are the
 /// defaults of `assets/match.toml`; the policy sees no config, only observations.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// A variant names the fields it changes, as `KEY=VAL,...` after `scripted:`
+/// or as a TOML file of `KEY = VAL` lines ([`ScriptedParams::parse_spec`]);
+/// the others keep their defaults.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct ScriptedParams {
     /// Half the field length (m): goals at x = +/- this.
     pub half_length: f32,
@@ -57,6 +63,12 @@ pub struct ScriptedParams {
     pub turn_stop: f32,
     /// A support player counts as in place within this distance (m).
     pub arrive: f32,
+    /// The first support player waits this far ahead of the ball (m)...
+    pub support_ahead: f32,
+    /// ...the second covers this far behind it (m)...
+    pub cover_behind: f32,
+    /// ...but no further forward than this x (m): how high the team presses.
+    pub cover_max_x: f32,
 }
 
 impl Default for ScriptedParams {
@@ -79,7 +91,139 @@ impl Default for ScriptedParams {
             turn_start: 0.35,
             turn_stop: 0.12,
             arrive: 0.3,
+            support_ahead: 1.3,
+            cover_behind: 1.2,
+            cover_max_x: 1.0,
         }
+    }
+}
+
+impl ScriptedParams {
+    /// The field names, alphabetically.
+    pub fn keys() -> Vec<String> {
+        match serde_json::to_value(ScriptedParams::default()) {
+            Ok(serde_json::Value::Object(m)) => m.keys().cloned().collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// Parses what follows `scripted:` in a policy spec: `KEY=VAL,KEY=VAL`
+    /// (the fields of this struct, in metres and radians) or the path of a
+    /// TOML file (ending in `.toml`) holding `KEY = VAL` lines. Fields not
+    /// named keep their defaults; unknown keys, numbers that do not parse
+    /// and values that make no sense (see [`ScriptedParams::validate`]) are
+    /// errors that say which.
+    pub fn parse_spec(spec: &str) -> Result<ScriptedParams, String> {
+        let p = if spec.ends_with(".toml") {
+            let text = std::fs::read_to_string(spec).map_err(|e| format!("reading {spec}: {e}"))?;
+            toml::from_str::<ScriptedParams>(&text).map_err(|e| format!("{spec}: {e}"))?
+        } else {
+            let mut map = match serde_json::to_value(ScriptedParams::default()) {
+                Ok(serde_json::Value::Object(m)) => m,
+                _ => return Err("scripted parameters do not serialise".into()),
+            };
+            for item in spec.split(',') {
+                let (key, val) = item
+                    .split_once('=')
+                    .ok_or_else(|| format!("expected KEY=VAL, got {item:?}"))?;
+                let key = key.trim();
+                if !map.contains_key(key) {
+                    return Err(format!(
+                        "unknown scripted parameter {key:?} (known: {})",
+                        ScriptedParams::keys().join(", ")
+                    ));
+                }
+                let v: f32 = val
+                    .trim()
+                    .parse()
+                    .map_err(|_| format!("{key}: {val:?} is not a number"))?;
+                if !v.is_finite() {
+                    return Err(format!("{key} must be a finite number, got {v}"));
+                }
+                map.insert(key.to_string(), serde_json::json!(v));
+            }
+            serde_json::from_value(serde_json::Value::Object(map)).map_err(|e| e.to_string())?
+        };
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Every value finite; lengths, angles and ranges positive; the kick
+    /// reach a non-empty interval; the turning hysteresis ordered.
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = [
+            ("half_length", self.half_length),
+            ("goal_half_width", self.goal_half_width),
+            ("b_rad", self.b_rad),
+            ("b_shoot", self.b_shoot),
+            ("shoot_range", self.shoot_range),
+            ("reach_max", self.reach_max),
+            ("reach_half_width", self.reach_half_width),
+            ("pass_range", self.pass_range),
+            ("pass_cone", self.pass_cone),
+            ("turn_start", self.turn_start),
+            ("arrive", self.arrive),
+        ];
+        let non_negative = [
+            ("reach_min", self.reach_min),
+            ("align_tolerance", self.align_tolerance),
+            ("behind", self.behind),
+            ("keeper_zone", self.keeper_zone),
+            ("contest_radius", self.contest_radius),
+            ("turn_stop", self.turn_stop),
+            ("support_ahead", self.support_ahead),
+            ("cover_behind", self.cover_behind),
+        ];
+        for (k, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{k} must be a positive number, got {v}"));
+            }
+        }
+        for (k, v) in non_negative {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("{k} must be a number >= 0, got {v}"));
+            }
+        }
+        if !self.cover_max_x.is_finite() {
+            return Err(format!(
+                "cover_max_x must be a finite number, got {}",
+                self.cover_max_x
+            ));
+        }
+        if self.reach_min >= self.reach_max {
+            return Err(format!(
+                "reach_min ({}) must be below reach_max ({})",
+                self.reach_min, self.reach_max
+            ));
+        }
+        if self.turn_stop > self.turn_start {
+            return Err(format!(
+                "turn_stop ({}) must not exceed turn_start ({})",
+                self.turn_stop, self.turn_start
+            ));
+        }
+        Ok(())
+    }
+
+    /// The fields that differ from the defaults as `KEY=VAL,...`,
+    /// alphabetically (empty for the defaults); parses back to `self`.
+    pub fn diff_spec(&self) -> String {
+        let (Ok(serde_json::Value::Object(mine)), Ok(serde_json::Value::Object(base))) = (
+            serde_json::to_value(self),
+            serde_json::to_value(ScriptedParams::default()),
+        ) else {
+            return String::new();
+        };
+        let mut parts = Vec::new();
+        for (k, v) in &mine {
+            if base.get(k) != Some(v) {
+                // f32 values went to JSON as f64; print the f32 so the text
+                // is the shortest that parses back to the same bits.
+                let x = v.as_f64().unwrap_or(f64::NAN) as f32;
+                parts.push(format!("{k}={x}"));
+            }
+        }
+        parts.join(",")
     }
 }
 
@@ -154,13 +298,13 @@ impl Scripted {
         let spot = if rank == 0 {
             // Ahead of the ball, across from it: a pass or a rebound comes here.
             [
-                (ball[0] + 1.3).clamp(-1.5, hl - 0.7),
+                (ball[0] + self.p.support_ahead).clamp(-1.5, hl - 0.7),
                 (ball[1] + side * 0.7).clamp(-1.6, 1.6),
             ]
         } else {
             // Behind the ball, covering the middle.
             [
-                (ball[0] - 1.2).clamp(-hl + 1.0, 1.0),
+                (ball[0] - self.p.cover_behind).clamp(-hl + 1.0, self.p.cover_max_x.max(-hl + 1.0)),
                 (ball[1] * 0.5).clamp(-1.2, 1.2),
             ]
         };
@@ -174,7 +318,7 @@ impl Scripted {
 
     /// Go for the ball and play it towards the opponent goal.
     fn engage(&mut self, obs: &Observation, keeper: bool) -> Action {
-        let p = self.p.clone();
+        let p = self.p;
         let me = obs.me();
         let pos = [me.x, me.y];
         let ball = [obs.ball.x, obs.ball.y];
@@ -484,6 +628,30 @@ mod tests {
         // Close to goal but robot-ball-goal not aligned: no shot.
         let o = obs(1, robot(2.0, -1.0, 0.0), [2.18, -1.0]);
         assert_ne!(s.act(&o), Action::Shoot);
+    }
+
+    #[test]
+    fn a_variant_with_a_longer_range_shoots_where_the_default_dribbles() {
+        let o = obs(1, robot(-0.2, 0.0, 0.0), [-0.02, 0.0]);
+        let mut s = Scripted::new(ScriptedParams::default());
+        assert_eq!(s.act(&o), Action::Forward);
+        let far = ScriptedParams::parse_spec("shoot_range=3.5").unwrap();
+        assert_eq!(Scripted::new(far).act(&o), Action::Shoot);
+    }
+
+    #[test]
+    fn the_shipped_variants_parse_and_differ_from_the_default() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/scripted");
+        let mut names: Vec<_> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        names.sort();
+        assert!(names.len() >= 2, "{names:?}");
+        for path in names {
+            let p = ScriptedParams::parse_spec(path.to_str().unwrap()).unwrap();
+            assert_ne!(p, ScriptedParams::default(), "{}", path.display());
+        }
     }
 
     #[test]
