@@ -8,14 +8,16 @@
 //! - no placement overlaps a body: after each tick, every body the referee's
 //!   commands moved (ball put back, robot reset, stood up, kick-off, set
 //!   play) is clear of every other body;
-//! - no lying robot moves unless something hits it: a robot that has lain a
+//! - no lying robot moves unless something hits it: a robot that has lain
 //!   1.5 s, and that nothing (robot or ball) has touched for 1.5 s,
 //!   stays where it lies, in position and orientation;
 //! - no ball rests on a foot for more than 0.5 s;
 //! - every out is restarted by the set play the rules name (SPL: a kick-in
 //!   over a touch line, over a goal line a corner kick when the defenders
 //!   touched it last and a goal kick otherwise, for the team that did not
-//!   touch it last), with the ball put near the spot the rules name.
+//!   touch it last), with the ball put near the spot the rules name;
+//! - every robot the sim has down as fallen (controller off) is down for the
+//!   referee too, at the end of every tick.
 //!
 //! The geometry is the real one: the URDF's collision primitives placed by
 //! each robot's recorded torso pose, measured with parry (rapier's geometry).
@@ -126,6 +128,7 @@ struct Audit {
     lying_moved: Vec<String>,
     ball_on_foot: Vec<String>,
     wrong_restarts: Vec<String>,
+    fallen_not_down: Vec<String>,
     /// Set plays seen, by kind: kick-in, goal kick, corner kick.
     restarts: [u64; 3],
     placements: u64,
@@ -303,6 +306,16 @@ impl Watch {
     fn tick(&mut self, a: &mut Audit, parts: &[Part], m: &Match, events: &[Event]) {
         let Some(before) = self.prev else { return };
         self.restarts(a, m, &before, events);
+        for (robot, r) in RobotId::all().zip(&m.sim().snapshot().robots) {
+            if r.fallen && !m.is_down(robot) {
+                a.fallen_not_down.push(format!(
+                    "seed {} tick {}: robot {} fallen in the sim, not down for the referee",
+                    self.seed,
+                    m.tick(),
+                    robot.index()
+                ));
+            }
+        }
         let now = Bodies::of(m.sim());
         let r = self.ball_radius;
         let ball_moved = before.ball.pos != now.ball.pos;
@@ -494,11 +507,12 @@ fn check(a: &Audit) {
         show("lying robot moved", &a.lying_moved),
         show("ball rests on a foot", &a.ball_on_foot),
         show("wrong restart", &a.wrong_restarts),
+        show("fallen, not down", &a.fallen_not_down),
     ];
     assert_eq!(
         counts,
-        [0, 0, 0, 0, 0],
-        "[ball through, placement overlaps, lying robots moved, balls on a foot, wrong restarts]"
+        [0, 0, 0, 0, 0, 0],
+        "[ball through, placement overlaps, lying robots moved, balls on a foot, wrong restarts, sim falls the referee missed]"
     );
     assert!(
         a.restarts.iter().sum::<u64>() > 0,

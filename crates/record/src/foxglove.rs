@@ -300,14 +300,6 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
     serde_json::to_vec(&json!({"deletions": [], "entities": entities})).expect("scene serialises")
 }
 
-/// Yaw, then a tilt about the robot's own y axis (enough to show a robot
-/// lying down), as a quaternion (x, y, z, w).
-fn robot_rotation(heading: f32, tilt: f32) -> [f32; 4] {
-    let (sy, cy) = (heading / 2.0).sin_cos();
-    let (sp, cp) = (tilt / 2.0).sin_cos();
-    [-sy * sp, cy * sp, cp * sy, cy * cp]
-}
-
 /// This tick's frame transforms, written into `out` (cleared first) without
 /// building a JSON tree: it runs every tick.
 pub fn write_transforms(out: &mut Vec<u8>, ns: u64, s: &StateRecord) {
@@ -331,13 +323,7 @@ pub fn write_transforms(out: &mut Vec<u8>, ns: u64, s: &StateRecord) {
     };
     out.extend_from_slice(br#"{"transforms":["#);
     for (i, r) in s.robots.iter().enumerate() {
-        tf(
-            out,
-            ROBOT_FRAMES[i],
-            [r.x, r.y, r.z],
-            robot_rotation(r.heading, r.tilt),
-            false,
-        );
+        tf(out, ROBOT_FRAMES[i], [r.x, r.y, r.z], r.rotation, false);
     }
     let b = &s.ball;
     tf(out, BALL_FRAME, [b.x, b.y, b.z], [0.0, 0.0, 0.0, 1.0], true);
@@ -347,14 +333,57 @@ pub fn write_transforms(out: &mut Vec<u8>, ns: u64, s: &StateRecord) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::messages::{BallRecord, ScoreRecord};
 
+    fn state(rotation: [f32; 4]) -> StateRecord {
+        let robot = crate::messages::RobotRecord {
+            x: 1.0,
+            y: 2.0,
+            z: 0.06,
+            heading: 0.0,
+            tilt: 1.57,
+            rotation,
+            fallen: true,
+        };
+        StateRecord {
+            tick: 3,
+            time: 0.3,
+            score: ScoreRecord { blue: 0, red: 0 },
+            possession: None,
+            ball: BallRecord {
+                x: 0.0,
+                y: 0.0,
+                z: 0.05,
+                vx: 0.0,
+                vy: 0.0,
+                vz: 0.0,
+            },
+            robots: [robot; ROBOTS],
+            state_hash: "0".repeat(16),
+        }
+    }
+
+    /// Issue 12: the transform carries the recorded orientation itself, so
+    /// a robot lying on its back is drawn on its back (a yaw-and-tilt
+    /// rebuild drew every fallen robot face down).
     #[test]
-    fn rotation_is_unit_and_yaw_only_when_upright() {
-        let q = robot_rotation(1.0, 0.0);
-        assert!((q[0].abs() + q[1].abs()) < 1e-7);
-        assert!(((q[2] * q[2] + q[3] * q[3]) - 1.0).abs() < 1e-6);
-        let q = robot_rotation(-2.0, 1.3);
-        let n: f32 = q.iter().map(|v| v * v).sum();
-        assert!((n - 1.0).abs() < 1e-6);
+    fn issue_12_the_transform_is_the_recorded_rotation() {
+        // On its back: pitched -90 degrees about y (x axis pointing up).
+        let h = std::f32::consts::FRAC_PI_4;
+        let on_back = [0.0, -h.sin(), 0.0, h.cos()];
+        let mut out = Vec::new();
+        write_transforms(&mut out, 300_000_000, &state(on_back));
+        let v: Value = serde_json::from_slice(&out).unwrap();
+        let r = &v["transforms"][0]["rotation"];
+        let got = [
+            r["x"].as_f64().unwrap(),
+            r["y"].as_f64().unwrap(),
+            r["z"].as_f64().unwrap(),
+            r["w"].as_f64().unwrap(),
+        ];
+        for (g, w) in got.iter().zip(on_back) {
+            assert!((*g as f32 - w).abs() < 1e-6, "{got:?}");
+        }
+        assert_eq!(v["transforms"][0]["child_frame_id"], "robot_0");
     }
 }

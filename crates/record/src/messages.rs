@@ -4,8 +4,11 @@ use naosoccer_proto::{Action, MatchStats, RobotId, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 use serde::{Deserialize, Serialize};
 
-/// Version of the channel layout; bumped when a message changes incompatibly.
-pub const RECORDING_FORMAT: u32 = 1;
+/// Version of the channel layout; bumped when a message changes incompatibly,
+/// or when the physics changes so that older recordings no longer replay.
+/// 2: robots carry their torso `rotation`; feet, contacts and placements of
+/// issue 12.
+pub const RECORDING_FORMAT: u32 = 2;
 
 /// `/match/meta`, once at the start: everything re-simulation needs besides
 /// the actions, and who played.
@@ -85,6 +88,10 @@ pub struct RobotRecord {
     pub heading: f32,
     /// Radians from upright.
     pub tilt: f32,
+    /// The torso's orientation, a unit quaternion `[x, y, z, w]` (world from
+    /// body: the body's x axis points forward, z up): which way a fallen
+    /// robot lies.
+    pub rotation: [f32; 4],
     pub fallen: bool,
 }
 
@@ -129,6 +136,7 @@ impl StateRecord {
                     z: r.pos[2],
                     heading: r.heading,
                     tilt: r.tilt,
+                    rotation: r.rotation,
                     fallen: r.fallen,
                 }
             }),

@@ -296,7 +296,10 @@ fn halves_and_a_fair_kick_off() {
 fn robot_off_the_field_is_reset_to_its_place() {
     let mut m = new_match(4);
     let r = robot(Team::Red, 2);
-    m.sim_mut().place_robot(r.index(), 0.5, 2.7, 0.0);
+    // Placements stay within half the ground margin of the lines, inside
+    // the out margin: put it at the edge and shove it over.
+    m.sim_mut().place_robot(r.index(), 0.5, 2.5, 0.0);
+    m.sim_mut().push_robot(r.index(), [0.0, 10.0, 0.0]);
     let events = m.step(&STAY).to_vec();
     assert!(
         events.contains(&Event::RobotOut { tick: 0, robot: r }),

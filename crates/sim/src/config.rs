@@ -25,8 +25,9 @@ pub struct SimConfig {
     pub solver_iterations: usize,
     /// Contacts are predicted this far ahead of touching, metres. Larger
     /// values catch fast bodies earlier but make the contact pairs of a
-    /// crowd of robots costlier. Fast bodies (a kicked ball) are swept
-    /// continuously against the goals and the ground anyway.
+    /// crowd of robots costlier. The ball is swept continuously (rapier's
+    /// CCD) against the goals, the ground and the robots anyway, so a kick
+    /// cannot skip it through a shin in one step.
     pub contact_prediction: f32,
     /// Gravity, m/s^2 (acting along -z).
     pub gravity: f32,
@@ -69,7 +70,8 @@ pub struct SimConfig {
     /// Below this speed (m/s) a ball on the ground is stopped dead: without
     /// it damping would leave it creeping forever.
     pub ball_rest_speed: f32,
-    /// Ball restitution (bounciness) against posts, nets and robots, 0..1.
+    /// Ball restitution (bounciness) against posts, nets and robots, 0..1;
+    /// also that of a kicking foot (see `kick_speed`).
     pub ball_restitution: f32,
 
     // --- robots: gait ---------------------------------------------------
@@ -107,8 +109,9 @@ pub struct SimConfig {
     /// more tips the robot over.
     pub balance_torque: f32,
     /// Balance limit: a robot tilted more than this from upright, rad, has
-    /// fallen; its controller switches off and it lies as an obstacle until
-    /// `stand_up`.
+    /// fallen; its controller switches off and it lies as a passive obstacle
+    /// (no force or torque of its own; its soles rub the ground like the
+    /// rest of its body) until `stand_up` or a placement.
     pub fall_tilt: f32,
     /// Walking against another robot trips the gait: a robot told `forward`
     /// that makes under half its walking speed with another robot's torso
@@ -124,8 +127,9 @@ pub struct SimConfig {
     /// its tilt passes `fall_tilt`, and if whatever it leans on holds it
     /// short of that, its controller takes over again after the second.
     pub stumble_torque: f32,
-    /// Friction coefficient of robot bodies (not soles: walking is driven by
-    /// the bounded leg force, so soles slide freely).
+    /// Friction coefficient of robot bodies (not the soles of a standing
+    /// robot: walking is driven by the bounded leg force, so they slide
+    /// freely; a fallen robot's soles have this friction too).
     pub robot_friction: f32,
 
     // --- robots: kick ---------------------------------------------------
@@ -134,7 +138,14 @@ pub struct SimConfig {
     pub kick_windup: f32,
     /// Recovery after the strike, seconds, before the next command acts.
     pub kick_recovery: f32,
-    /// Ball speed a kick imparts, m/s.
+    /// Ball speed a kick gives a ball at rest, m/s. The strike is an
+    /// impact, not a new velocity: the foot swings along the kick direction
+    /// at `u = kick_speed / (1 + ball_restitution)` and hits the ball as a
+    /// massive body would, so the ball's velocity along the swing becomes
+    /// `u + e (u - v_n)` (`e` = `ball_restitution`, `v_n` its velocity along
+    /// the swing before) and its velocity across the swing stays. A 2.9 m/s
+    /// ball coming straight at the kicker goes back at `kick_speed + e * 2.9`;
+    /// one moving away faster than the foot is not reached (no kick).
     pub kick_speed: f32,
     /// Kick speed error, a fraction: speed scaled by 1 +/- this (uniform).
     pub kick_speed_noise: f32,

@@ -795,8 +795,10 @@ mod tests {
     /// second: no robot stays uncontrolled without the referee seeing a fall.
     #[test]
     fn issue_12_a_robot_that_catches_itself_walks_again() {
-        let mut cfg = SimConfig::default();
-        cfg.stumble_torque = 0.5; // too weak to throw it over
+        let cfg = SimConfig {
+            stumble_torque: 0.5, // too weak to throw it over
+            ..SimConfig::default()
+        };
         let model = RobotModel::builtin().unwrap();
         let mut sim = Sim::new(&cfg, &model, 1).unwrap();
         sim.place_ball(2.5, 2.0);

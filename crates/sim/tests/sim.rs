@@ -593,3 +593,178 @@ mod issue_12 {
         assert!(through.is_empty(), "passed through: {through:?}");
     }
 }
+
+/// Issue 12: placements go to free ground, and the kick is an impact.
+mod issue_12_placement_and_kick {
+    use super::*;
+
+    fn settle_height(sim: &mut Sim, robot: usize) -> f32 {
+        run(sim, 1.0);
+        sim.snapshot().robots[robot].pos[2]
+    }
+
+    /// Audit: seven ball placements into a robot's legs, where the ball
+    /// stayed lodged (seed 4 tick 3282: 6.6 cm into a shin for 2 s).
+    #[test]
+    fn issue_12_a_ball_placed_into_a_robot_goes_to_the_nearest_free_spot() {
+        let mut sim = lab(21);
+        let (x, y) = sim.place_ball(0.0, 0.02);
+        let d = (x * x + y * y).sqrt();
+        assert!(d > 0.1 && d < 0.35, "ball put at ({x}, {y})");
+        // Clear: nothing pushes it, so it stays exactly there.
+        run(&mut sim, 1.0);
+        let b = sim.snapshot().ball;
+        assert!(
+            dist2(b.pos, [x, y, 0.0]) < 1e-4,
+            "{:?} moved from ({x}, {y})",
+            b.pos
+        );
+        assert!(dist2(sim.snapshot().robots[0].pos, [0.0; 3]) < 0.01);
+        // A free spot is used as asked.
+        assert_eq!(sim.place_ball(1.0, 1.0), (1.0, 1.0));
+    }
+
+    /// Audit: 14 get-up or robot_out resets onto another robot's foot; one
+    /// stood 0.37 m high for 12 s (seed 18 tick 3891).
+    #[test]
+    fn issue_12_a_robot_placed_onto_another_stands_on_the_ground_beside_it() {
+        let mut sim = lab(22);
+        let (x, y) = sim.place_robot(1, 0.12, 0.0, std::f32::consts::PI);
+        assert!((x, y) != (0.12, 0.0), "placed into robot 0");
+        let h = settle_height(&mut sim, 1);
+        assert!((h - 0.333).abs() < 0.005, "robot 1 stands {h} m high");
+        let s = sim.snapshot();
+        assert!(!s.robots[0].fallen && !s.robots[1].fallen);
+        assert!(
+            dist2(s.robots[1].pos, [x, y, 0.0]) < 0.02,
+            "pushed away after placement"
+        );
+    }
+
+    /// Lying robots block placements too: a robot put (or stood up) where
+    /// another lies stands beside it, on the ground.
+    #[test]
+    fn issue_12_a_robot_placed_onto_a_lying_one_stands_beside_it() {
+        let mut sim = lab(23);
+        sim.place_robot(1, 1.0, 0.0, 0.0);
+        sim.push_robot(1, [12.0, 0.0, 0.0]);
+        run(&mut sim, 2.0);
+        let lying = sim.snapshot().robots[1];
+        assert!(lying.fallen);
+        let (x, y) = sim.place_robot(0, lying.pos[0], lying.pos[1], 0.0);
+        assert!((x, y) != (lying.pos[0], lying.pos[1]));
+        let h = settle_height(&mut sim, 0);
+        assert!(
+            (h - 0.333).abs() < 0.005,
+            "robot 0 stands {h} m high at ({x}, {y}), robot 1 lies at {:?}",
+            lying.pos
+        );
+        assert!(
+            dist2(sim.snapshot().robots[1].pos, lying.pos) < 0.01,
+            "robot 1 was shoved"
+        );
+    }
+
+    #[test]
+    fn issue_12_place_all_puts_everything_down_apart_in_robot_order() {
+        let mut sim = lab(24);
+        let spots = [(0.5, 0.5, 0.0); ROBOTS];
+        let (ball, placed) = sim.place_all((0.5, 0.5), &spots);
+        assert_eq!(ball, (0.5, 0.5), "the ball goes first, where asked");
+        for (i, &(x, y)) in placed.iter().enumerate() {
+            for &(u, v) in &placed[..i] {
+                assert!(
+                    ((x - u).powi(2) + (y - v).powi(2)).sqrt() > 0.1,
+                    "robots {placed:?}"
+                );
+            }
+        }
+        run(&mut sim, 1.0);
+        let s = sim.snapshot();
+        for (i, r) in s.robots.iter().enumerate() {
+            assert!(
+                !r.fallen && (r.pos[2] - 0.333).abs() < 0.005,
+                "robot {i}: {r:?}"
+            );
+            assert!(
+                dist2(r.pos, [placed[i].0, placed[i].1, 0.0]) < 0.02,
+                "robot {i} shoved"
+            );
+        }
+        // Deterministic: the same call from the same state, the same spots.
+        let mut again = lab(24);
+        assert_eq!(again.place_all((0.5, 0.5), &spots), (ball, placed));
+        // Bodies not yet moved do not block: robot 7 sits on robot 0's
+        // asked spot before the call, robot 0 still gets it.
+        let mut sim = lab(25);
+        sim.place_robot(7, 1.5, -1.0, 0.0);
+        let mut spots = [(0.0, 0.0, 0.0); ROBOTS];
+        for (i, s) in spots.iter_mut().enumerate() {
+            *s = (-2.0 + 0.5 * i as f32, 1.5, 0.0);
+        }
+        spots[0] = (1.5, -1.0, 0.0);
+        let (_, placed) = sim.place_all((0.0, 0.0), &spots);
+        assert_eq!(placed[0], (1.5, -1.0));
+    }
+
+    #[test]
+    fn issue_12_placements_stay_within_the_lines() {
+        let mut sim = lab(26);
+        let cfg = sim.config().clone();
+        let (x, y) = sim.place_ball(10.0, -10.0);
+        assert_eq!((x, y), (cfg.field_length / 2.0, -cfg.field_width / 2.0));
+        let (x, y) = sim.place_robot(3, -10.0, 10.0, 0.0);
+        let m = cfg.ground_margin / 2.0;
+        assert_eq!(
+            (x, y),
+            (-cfg.field_length / 2.0 - m, cfg.field_width / 2.0 + m)
+        );
+    }
+
+    /// Robot 0 shoots; right before the strike the ball is put in reach with
+    /// velocity `v`. Returns the kicks of the strike step and the ball's
+    /// velocity after it.
+    fn strike_on(v: (f32, f32)) -> (Vec<naosoccer_sim::Kick>, [f32; 3]) {
+        let mut sim = lab(27);
+        sim.set_command(0, Command::Shoot);
+        let windup = sim.config().steps_for(sim.config().kick_windup);
+        for _ in 0..windup - 1 {
+            sim.step();
+        }
+        sim.place_ball(0.18, 0.0);
+        sim.set_ball_velocity(v.0, v.1);
+        sim.step();
+        (sim.snapshot().kicks.clone(), sim.snapshot().ball.vel)
+    }
+
+    /// Audit: a 2.9 m/s ball coming at the kicker was sent straight back at
+    /// the kick speed, as if it had been at rest.
+    #[test]
+    fn issue_12_a_kick_is_an_impact_not_a_new_velocity() {
+        let cfg = SimConfig::default();
+        let (e, k, noise) = (cfg.ball_restitution, cfg.kick_speed, cfg.kick_speed_noise);
+        // At rest: the kick speed (within its noise).
+        let (kicks, _) = strike_on((0.0, 0.0));
+        assert_eq!(kicks.len(), 1);
+        let rest = kicks[0].speed;
+        assert!((rest - k).abs() <= k * noise + 1e-3, "{rest}");
+        // Head-on at 2.9 m/s: back faster, by e times the incoming speed
+        // (the same seed draws the same noise).
+        let (kicks, vel) = strike_on((-2.9, 0.0));
+        assert_eq!(kicks.len(), 1);
+        assert!(
+            (kicks[0].speed - (rest + e * 2.9)).abs() < 0.05,
+            "{} vs {rest}",
+            kicks[0].speed
+        );
+        assert!(vel[0] > 0.0);
+        // Across the foot at 2 m/s: the sideways speed stays.
+        let (kicks, vel) = strike_on((0.0, 2.0));
+        assert_eq!(kicks.len(), 1);
+        assert!(vel[1] > 1.8 && vel[0] > 0.9 * rest, "{vel:?}");
+        // Running away faster than the foot swings: not reached.
+        let (kicks, vel) = strike_on((3.5, 0.0));
+        assert!(kicks.is_empty(), "{kicks:?}");
+        assert!(vel[0] > 3.0);
+    }
+}

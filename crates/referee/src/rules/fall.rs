@@ -1,7 +1,15 @@
-//! Falls (the paper's fall detection and `getup`): a robot whose torso drops
-//! under the height threshold or tilts past the tilt threshold has fallen. It
-//! lies, as an obstacle and without acting, for the stand-up cost, then is
-//! stood up where it lies.
+//! Falls (the paper's fall detection and `getup`): a robot has fallen when
+//! the sim says it lost its balance (`RobotState::fallen`: its torso tilted
+//! past the sim's `fall_tilt`), or its torso drops under the height threshold,
+//! or tilts past the tilt threshold. It lies, as an obstacle and without
+//! acting, for the stand-up cost, then is stood up where it lies.
+//!
+//! The sim switches a robot's controller off when it falls, and also while
+//! it topples from a stumble, which is not yet a fall: the stumble ends in a
+//! fall once the tilt passes `fall_tilt`, or, if the robot catches itself,
+//! gives the controller back within a second. So every robot the sim leaves
+//! without its controller is counted down here within a second, and stood
+//! up by this rule (the sim's fall lasts until `stand_up` or a placement).
 
 use naosoccer_proto::{Event, RobotId, ROBOTS};
 use naosoccer_sim::Snapshot;
@@ -54,7 +62,8 @@ impl FallRule {
         }
     }
 
-    /// Whether the snapshot shows robot `i` fallen.
+    /// Whether the snapshot shows robot `i` fallen: the sim's fall, or the
+    /// referee's own thresholds.
     pub fn has_fallen(&self, snap: &Snapshot, i: usize) -> bool {
         let r = &snap.robots[i];
         r.fallen || r.pos[2] < self.height || r.tilt > self.tilt
@@ -108,6 +117,22 @@ mod tests {
         assert_eq!(out.events, vec![Event::GetUp { tick: 41, robot }]);
         assert_eq!(out.commands, vec![Command::StandUp { robot }]);
         assert!(!rule.is_down(2));
+    }
+
+    /// Issue 12: the sim's fall counts on its own, below the referee's
+    /// thresholds (the sim's `fall_tilt` is the lower), so a robot whose
+    /// controller the sim switched off for a fall is always counted down.
+    #[test]
+    fn the_sims_fall_alone_is_a_fall() {
+        let mut rule = FallRule::new(0.2, 0.5, 30);
+        let mut s = snapshot();
+        s.robots[1].fallen = true;
+        s.robots[1].tilt = 0.4;
+        let mut out = Outcome::default();
+        rule.check(&s, 7, &mut out);
+        let robot = RobotId::from_index(1).unwrap();
+        assert_eq!(out.events, vec![Event::Fall { tick: 7, robot }]);
+        assert!(rule.is_down(1));
     }
 
     #[test]
