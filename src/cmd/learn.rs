@@ -49,7 +49,7 @@ fn parse_players(s: &str) -> Result<Vec<usize>, String> {
   naosoccer train --algo dqn --steps 2000000 --seed 1 --out runs/dqn-1
   naosoccer train --algo dqn --preset team --steps 3000000 --seed 1 --out runs/dqn-team-1
   naosoccer train --algo ppo --preset cleanrl --opponent self-play:200000 --out runs/ppo-sp
-  naosoccer train --algo ppo --preset team --config assets/train.toml --steps 20000000 \
+  naosoccer train --algo ppo --preset team --config assets/train-team.toml --steps 20000000 \
                   --seed 1 --checkpoint-every 500000 --out runs/ppo-team-1
 
 Presets (--preset, PPO): paper (the paper's Algorithm 2, every robot decides
