@@ -334,3 +334,26 @@ fn self_play_and_frozen_opponents_train_repeatably() {
         assert_ne!(a, c, "{algo}: another opponent and seed, other metrics");
     }
 }
+
+/// The `team` preset (Double DQN, 3-step returns, epsilon schedule, shared
+/// network) on the same tiny task and budget, its schedule and warm-up
+/// scaled to the budget.
+#[test]
+fn dqn_team_preset_learns_the_tiny_task_and_beats_random() {
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let mut cfg = tiny_config(Algo::Dqn, 1);
+    cfg.dqn = naosoccer_learn::dqn::DqnConfig::team();
+    cfg.steps = 40_000;
+    cfg.dqn.warmup = 500;
+    cfg.dqn.epsilon_decay = 20_000;
+    cfg.dqn.target_every = 500;
+    let dir = out_dir("dqn_team_tiny");
+    train(&cfg, &dir, &mut |_| {}).unwrap();
+    let (random, learned) = (random_return(&cfg), learned_return(&cfg, &dir));
+    eprintln!("tiny task, DQN team preset: random {random:.3}, learned {learned:.3}");
+    assert!(
+        learned > random * 1.25,
+        "DQN team {learned:.3} does not beat random {random:.3}"
+    );
+}

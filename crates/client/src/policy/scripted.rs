@@ -318,7 +318,7 @@ impl Scripted {
 
     /// Go for the ball and play it towards the opponent goal.
     fn engage(&mut self, obs: &Observation, keeper: bool) -> Action {
-        let p = self.p.clone();
+        let p = self.p;
         let me = obs.me();
         let pos = [me.x, me.y];
         let ball = [obs.ball.x, obs.ball.y];
