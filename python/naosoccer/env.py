@@ -39,7 +39,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
     actions ``Discrete(5)``: 0 forward, 1 turn_left, 2 turn_right, 3 shoot,
     4 stay. One ``step`` is one control tick of the match (lockstep: the server
     waits for the four actions). Rewards are each robot's reward as the server
-    sends it (protocol 1.1: the ``[reward]`` section of the server's match
+    sends it (protocol 1.1+: the ``[reward]`` section of the server's match
     configuration, the learning crate's MDP); with ``reward_weights`` they are
     computed here instead by :func:`naosoccer.obs.team_rewards` with those
     weights (also against a 1.0 server, which sends none). The episode is the whole match: when

@@ -1,7 +1,6 @@
 """NaoSoccerParallelEnv against a real server it starts itself."""
 
 import json
-import math
 import subprocess
 import threading
 from pathlib import Path
@@ -11,7 +10,6 @@ import pytest
 from pettingzoo.test import parallel_api_test, parallel_seed_test
 
 from naosoccer import FEATURE_NAMES, NaoSoccerError, NaoSoccerParallelEnv, RewardWeights, protocol, team_rewards
-from naosoccer.obs import log_compress
 
 TRAIN_TOML = Path(__file__).resolve().parents[2] / "assets" / "train.toml"
 
@@ -88,18 +86,18 @@ def test_server_rewards_agree_with_the_client_side_terms(make_env):
 
 def test_server_rewards_follow_the_servers_match_configuration(make_env):
     # assets/train.toml (the shipped policies' training reward) pays
-    # `progress`, which no observation-only computation can reproduce on a
-    # goal tick: the server's rewards carry it.
+    # `progress`, potential-based shaping outside the log (protocol 1.2): the
+    # ball's x in the team frame, between the observations before and after
+    # a tick. The server's rewards carry it.
     env = make_env(minutes=0.2, server_args=["--match-config", str(TRAIN_TOML)])
     w = RewardWeights(goal=10.0, close=0.02, control=0.02, opponent_control=0.02)
     moved = 0
     for t, (rew, before, after) in enumerate(play_to_end(env, 3, wander)):
         if after is None or after["score"] != before["score"]:
-            continue  # the last tick and goal ticks: no observation shows the ball's move
+            continue  # the last tick and goal ticks
         dx = after["ball"]["x"] - before["ball"]["x"]
         moved += abs(dx) > 1e-3
-        raw = [math.copysign(math.expm1(abs(r)), r) for r in team_rewards(w, after, 0, 0)]
-        expected = [log_compress(s + 1.0 * dx) for s in raw]
+        expected = [r + 1.0 * dx for r in team_rewards(w, after, 0, 0)]
         assert rew == pytest.approx(expected, abs=1e-4), f"tick {t}"
     assert moved > 10, "the ball moved, so progress was paid"
 

@@ -1,112 +1,90 @@
-//! What a trained team does on states built by hand: for each scenario, one
-//! robot's network outputs (DQN: Q-values; PPO: action probabilities) and
-//! the action it picks greedily.
+//! Probes a trained team on states built by hand: what does each robot do
+//! with the ball just ahead, in kick reach before the goal, behind it, to
+//! its left? Prints the action probabilities (the team's sampling policy,
+//! `shoot` masked out of reach as the team plays).
 //!
-//!     cargo run --release -p naosoccer-learn --example probe -- dqn:assets/policies/dqn-seed1 ...
-//!
-//! Every scenario starts from the real kick-off observation of blue player 1
-//! (the striker) and moves that robot and the ball; the other robots stay on
-//! their kick-off places.
+//! `cargo run --release -p naosoccer-learn --example probe -- ppo:DIR`
 
+use naosoccer_learn::obs::OBS_DIM;
 use naosoccer_learn::LearnedPolicy;
-use naosoccer_proto::{Action, Observation, Team};
+use naosoccer_proto::{Observation, Team};
 use naosoccer_referee::{Match, MatchConfig};
 
-const ACTIONS: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
+const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
 
-type Scenario = (&'static str, [f32; 3], [f32; 2], &'static [Action]);
-
-/// (name, robot x, y, heading, ball x, y, the actions a sensible player takes)
-const SCENARIOS: [Scenario; 7] = [
-    (
-        "kick-off, 0.3 m behind the ball, facing it",
-        [-0.3, 0.0, 0.0],
-        [0.0, 0.0],
-        &[Action::Forward],
-    ),
-    (
-        "ball 1.5 m straight ahead",
-        [-1.5, 0.0, 0.0],
-        [0.0, 0.0],
-        &[Action::Forward],
-    ),
-    (
-        "ball in kick reach, 0.8 m from goal, lined up",
-        [2.0, 0.0, 0.0],
-        [2.18, 0.0],
-        &[Action::Shoot],
-    ),
-    (
-        "ball in kick reach, 1.5 m from goal, lined up",
-        [1.3, 0.3, 0.0],
-        [1.48, 0.3],
-        &[Action::Shoot],
-    ),
-    (
-        "ball 1 m to the left",
-        [0.0, 0.0, 0.0],
-        [0.0, 1.0],
-        &[Action::TurnLeft],
-    ),
-    (
-        "ball 1 m to the right",
-        [0.0, 0.0, 0.0],
-        [0.0, -1.0],
-        &[Action::TurnRight],
-    ),
-    (
-        "ball 1 m behind",
-        [0.5, 0.0, 0.0],
-        [-0.5, 0.0],
-        &[Action::TurnLeft, Action::TurnRight],
-    ),
-];
-
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let specs: Vec<String> = std::env::args().skip(1).collect();
-    if specs.is_empty() {
-        return Err("usage: probe SPEC... (ppo:DIR, dqn:DIR)".into());
+fn state(base: &Observation, player: usize, me: (f32, f32, f32), ball: (f32, f32)) -> Observation {
+    let mut o = base.clone();
+    o.player = player as u8;
+    o.own[player].x = me.0;
+    o.own[player].y = me.1;
+    o.own[player].heading = me.2;
+    o.ball.x = ball.0;
+    o.ball.y = ball.1;
+    o.ball.vx = 0.0;
+    o.ball.vy = 0.0;
+    o.control = [false; 4];
+    o.opponent_control = false;
+    o.set_play = None;
+    // Teammates out of the way, behind.
+    for p in (0..4).filter(|&p| p != player) {
+        o.own[p].x = -2.0;
+        o.own[p].y = -1.5 + p as f32;
     }
-    let m = Match::new(&MatchConfig::default(), 1)?;
-    let mut base = naosoccer_referee::blank_observation();
-    m.observe_into(Team::Blue, 1, &mut base);
-    for spec in &specs {
-        let policy = LearnedPolicy::load(spec)?;
-        let scale = policy.scale();
-        let is_ppo = spec.starts_with("ppo");
-        println!("{spec}");
-        let mut sensible = 0;
-        for (name, [x, y, h], [bx, by], want) in SCENARIOS {
-            let mut o: Observation = base.clone();
-            o.own[1].x = x;
-            o.own[1].y = y;
-            o.own[1].heading = h;
-            o.ball.x = bx;
-            o.ball.y = by;
-            let mut feats = vec![0.0; naosoccer_learn::OBS_DIM];
-            scale.encode(&o, &mut feats);
-            let mut out = policy.outputs(&feats, 1);
-            if is_ppo {
-                let max = out.iter().cloned().fold(f32::MIN, f32::max);
-                let sum: f32 = out.iter().map(|v| (v - max).exp()).sum();
-                out.iter_mut().for_each(|v| *v = (*v - max).exp() / sum);
+    o
+}
+
+fn main() {
+    let spec = std::env::args().nth(1).expect("usage: probe ppo:DIR");
+    let p = LearnedPolicy::load(&spec).expect("load the policy");
+    let m = Match::new(&MatchConfig::default(), 1).unwrap();
+    let base = m.observe(Team::Blue, 0);
+    let pi = std::f32::consts::PI;
+    let cases: [(&str, (f32, f32, f32), (f32, f32)); 6] = [
+        (
+            "0.3 m behind the ball, facing it",
+            (-0.3, 0.0, 0.0),
+            (0.0, 0.0),
+        ),
+        (
+            "ball in kick reach, 0.8 m before the goal",
+            (2.0, 0.0, 0.0),
+            (2.18, 0.0),
+        ),
+        (
+            "ball in reach, facing the own goal",
+            (0.0, 0.0, pi),
+            (-0.18, 0.0),
+        ),
+        ("ball 0.5 m behind", (0.0, 0.0, 0.0), (-0.5, 0.0)),
+        ("ball 0.5 m to the left", (0.0, 0.0, 0.0), (0.0, 0.5)),
+        (
+            "ball 1 m ahead, 20 deg right",
+            (-1.0, 0.0, 0.0),
+            (-0.06, -0.34),
+        ),
+    ];
+    let scale = p.scale();
+    println!("{spec}");
+    for (name, me, ball) in cases {
+        println!("{name}:");
+        for player in 0..4 {
+            let o = state(&base, player, me, ball);
+            let mut f = vec![0.0f32; OBS_DIM];
+            scale.encode(&o, &mut f);
+            let logits = p.outputs(&f, player);
+            let masked = p.decision().is_some_and(|d| d.mask_shoot) && !scale.kick.in_reach(&o);
+            let mx = logits.iter().cloned().fold(f32::MIN, f32::max);
+            let mut e: Vec<f32> = logits.iter().map(|l| (l - mx).exp()).collect();
+            if masked {
+                e[3] = 0.0;
             }
-            let best = naosoccer_learn::dqn::argmax(&out);
-            let ok = want.iter().any(|a| a.index() == best);
-            sensible += usize::from(ok);
-            let cells: Vec<String> = out
+            let z: f32 = e.iter().sum();
+            let probs: Vec<String> = e
                 .iter()
-                .zip(ACTIONS)
-                .map(|(v, a)| format!("{a} {v:+.3}"))
+                .zip(NAMES)
+                .map(|(x, n)| format!("{n} {:.2}", x / z))
                 .collect();
-            println!(
-                "  {name:<48} -> {:<10} {} | {}",
-                ACTIONS[best],
-                if ok { "  " } else { "!!" },
-                cells.join("  ")
-            );
+            println!("  player {player}: {}", probs.join(", "));
         }
-        println!("  sensible choices: {sensible} of {}", SCENARIOS.len());
     }
-    Ok(())
 }

@@ -386,10 +386,16 @@ impl QNet {
     /// `name` prefixes the variables (`q0.l0.weight`, ...), so several
     /// networks can share one checkpoint file.
     pub fn new(hidden: &[usize], name: &str) -> QNet {
+        QNet::with_input(OBS_DIM, hidden, name)
+    }
+
+    /// A network reading `input` features (an older observation layout's
+    /// length, for the shipped teams).
+    pub fn with_input(input: usize, hidden: &[usize], name: &str) -> QNet {
         let vs = nn::VarStore::new(tch::Device::Cpu);
         let mlp = Mlp::new(
             &(vs.root() / name),
-            OBS_DIM,
+            input,
             hidden,
             ACTIONS,
             Activation::Relu,

@@ -35,10 +35,12 @@ impl Opponent {
     }
 }
 
-/// Picks actions for many robots from their observation vectors at once.
+/// Picks actions for whole teams of many matches at once.
 pub trait BatchActor: Send {
-    /// `obs` holds `out.len()` rows of `OBS_DIM`.
-    fn act_rows(&mut self, obs: &[f32], out: &mut [usize]);
+    /// `teams[i]` is one match's team: the match seed (which keys sampling
+    /// and per-robot decision state) and its robots' observations in player
+    /// order. `out` gets one action index per observation, in order.
+    fn act_teams(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]);
 }
 
 /// What one finished episode (a whole match) showed.
@@ -77,6 +79,8 @@ struct Slot {
     policies: Vec<Option<Box<dyn Policy>>>,
     returns: Vec<f32>,
     finished: Option<Episode>,
+    /// Index of this episode's opponent.
+    opp: usize,
 }
 
 /// The vectorised environment.
@@ -85,14 +89,61 @@ pub struct VecEnv {
     env: EnvConfig,
     scale: ObsScale,
     slots: Vec<Slot>,
-    opponent: Opponent,
+    /// The opponents, and the weights each episode draws its opponent by.
+    opponents: Vec<Opponent>,
+    mix: Mix,
     /// Learner observation vectors, `[matches * L, OBS_DIM]`.
     feats: Vec<f32>,
     rewards: Vec<f32>,
     dones: Vec<bool>,
-    opp_feats: Vec<f32>,
     opp_actions: Vec<usize>,
     ticks: u64,
+}
+
+/// How each episode picks its opponent: by weight, from a hash of the run's
+/// seed, the match index and the episode (so the choice does not depend on
+/// threads or on when it is asked).
+#[derive(Debug, Clone)]
+struct Mix {
+    kinds: Vec<Option<PolicyKind>>,
+    /// Cumulative weights, normalised to end at 1.
+    cumulative: Vec<f64>,
+}
+
+impl Mix {
+    fn new(opponents: &[Opponent], weights: &[f64]) -> Result<Mix, LearnError> {
+        let total: f64 = weights.iter().sum();
+        if opponents.is_empty()
+            || opponents.len() != weights.len()
+            || weights.iter().any(|w| !(*w >= 0.0))
+            || !(total > 0.0)
+        {
+            return Err(LearnError::Config(format!(
+                "opponent weights {weights:?} for {} opponents",
+                opponents.len()
+            )));
+        }
+        let mut acc = 0.0;
+        Ok(Mix {
+            kinds: opponents.iter().map(Opponent::builtin_kind).collect(),
+            cumulative: weights
+                .iter()
+                .map(|w| {
+                    acc += w / total;
+                    acc
+                })
+                .collect(),
+        })
+    }
+
+    fn pick(&self, seed: u64, index: usize, episode: u64) -> usize {
+        let u = (episode_seed(seed ^ 0x5EED_0FF0_0000_0001, index, episode) >> 11) as f64
+            / (1u64 << 53) as f64;
+        self.cumulative
+            .iter()
+            .position(|&c| u < c)
+            .unwrap_or(self.cumulative.len() - 1)
+    }
 }
 
 /// The seed of match `index`'s `episode`-th episode: a splitmix64 mix, so
@@ -130,6 +181,8 @@ impl VecEnv {
             )));
         }
         let l = env.learners.len();
+        let opponents = vec![opponent];
+        let mix = Mix::new(&opponents, &[1.0])?;
         let mut slots = Vec::with_capacity(env.matches);
         for index in 0..env.matches {
             let team = if index % 2 == 0 {
@@ -149,8 +202,9 @@ impl VecEnv {
                 team,
                 episode: 0,
                 finished: None,
+                opp: 0,
             };
-            slot.build_policies(&env, opponent.builtin_kind());
+            slot.build_policies(&env, &mix);
             slot.observe_all();
             slots.push(slot);
         }
@@ -160,12 +214,12 @@ impl VecEnv {
             feats: vec![0.0; env.matches * l * OBS_DIM],
             rewards: vec![0.0; env.matches * l],
             dones: vec![false; env.matches * l],
-            opp_feats: Vec::new(),
             opp_actions: Vec::new(),
             env,
             scale,
             slots,
-            opponent,
+            opponents,
+            mix,
             ticks: 0,
         };
         for (slot, f) in venv.slots.iter().zip(venv.feats.chunks_mut(l * OBS_DIM)) {
@@ -212,13 +266,75 @@ impl VecEnv {
         &self.dones
     }
 
+    /// Encodes observations with `scale` from now on (e.g. an older layout
+    /// version); re-encodes the current ones.
+    pub fn set_obs_scale(&mut self, scale: ObsScale) {
+        self.scale = scale;
+        let l = self.env.learners.len();
+        for (slot, f) in self.slots.iter().zip(self.feats.chunks_mut(l * OBS_DIM)) {
+            slot.encode_learners(&self.env.learners, &self.scale, f);
+        }
+    }
+
+    /// The observation row `row` was encoded from (the learning robot's
+    /// last observation; after an episode's end, the next episode's first).
+    pub fn learner_observation(&self, row: usize) -> &Observation {
+        let l = self.env.learners.len();
+        let slot = &self.slots[row / l];
+        &slot.obs[slot.team.index() * PLAYERS_PER_TEAM + self.env.learners[row % l]]
+    }
+
     /// Replaces the opponent (self-play: a newer snapshot).
     pub fn set_opponent(&mut self, opponent: Opponent) {
-        let kind = opponent.builtin_kind();
-        self.opponent = opponent;
+        self.set_opponents(vec![opponent], &[1.0])
+            .expect("one opponent of weight 1 is a valid mix");
+    }
+
+    /// Replaces the opponents: from now on each episode plays one of them,
+    /// drawn by `weights`; the matches under way draw theirs again now.
+    pub fn set_opponents(
+        &mut self,
+        opponents: Vec<Opponent>,
+        weights: &[f64],
+    ) -> Result<(), LearnError> {
+        self.mix = Mix::new(&opponents, weights)?;
+        self.opponents = opponents;
         for slot in &mut self.slots {
-            slot.build_policies(&self.env, kind);
+            slot.build_policies(&self.env, &self.mix);
         }
+        Ok(())
+    }
+
+    /// Starts every match afresh at episode `episodes[i]` (as if that many
+    /// had finished), the tick counter at `ticks`: where a resumed run picks
+    /// up, at an episode boundary.
+    pub fn restart_at(&mut self, episodes: &[u64], ticks: u64) -> Result<(), LearnError> {
+        if episodes.len() != self.slots.len() {
+            return Err(LearnError::Config(format!(
+                "{} episode numbers for {} matches",
+                episodes.len(),
+                self.slots.len()
+            )));
+        }
+        let l = self.env.learners.len();
+        for (slot, &e) in self.slots.iter_mut().zip(episodes) {
+            slot.episode = e;
+            slot.m = Match::new(&self.cfg, episode_seed(self.env.seed, slot.index, e))?;
+            slot.returns = vec![0.0; l];
+            slot.finished = None;
+            slot.build_policies(&self.env, &self.mix);
+            slot.observe_all();
+        }
+        for (slot, f) in self.slots.iter().zip(self.feats.chunks_mut(l * OBS_DIM)) {
+            slot.encode_learners(&self.env.learners, &self.scale, f);
+        }
+        self.ticks = ticks;
+        Ok(())
+    }
+
+    /// Each match's episode number (how many of its episodes finished).
+    pub fn episodes(&self) -> Vec<u64> {
+        self.slots.iter().map(|s| s.episode).collect()
     }
 
     /// Applies one action per row and steps every match one control tick;
@@ -227,33 +343,39 @@ impl VecEnv {
     pub fn step(&mut self, actions: &[usize]) -> Result<Vec<Episode>, LearnError> {
         let l = self.env.learners.len();
         assert_eq!(actions.len(), self.rows(), "one action per learning robot");
-        let net_opponent = if let Opponent::Net(actor) = &mut self.opponent {
-            let n = self.env.matches * PLAYERS_PER_TEAM;
-            self.opp_feats.resize(n * OBS_DIM, 0.0);
-            self.opp_actions.resize(n, 0);
-            for (slot, f) in self
-                .slots
-                .iter()
-                .zip(self.opp_feats.chunks_mut(PLAYERS_PER_TEAM * OBS_DIM))
-            {
+        self.opp_actions
+            .resize(self.env.matches * PLAYERS_PER_TEAM, 0);
+        let mut teams: Vec<(u64, &[Observation])> = Vec::new();
+        let mut at: Vec<usize> = Vec::new();
+        let mut acts: Vec<usize> = Vec::new();
+        for (k, opponent) in self.opponents.iter_mut().enumerate() {
+            let Opponent::Net(actor) = opponent else {
+                continue;
+            };
+            teams.clear();
+            at.clear();
+            for (j, slot) in self.slots.iter().enumerate().filter(|(_, s)| s.opp == k) {
                 let base = slot.team.other().index() * PLAYERS_PER_TEAM;
-                for p in 0..PLAYERS_PER_TEAM {
-                    self.scale
-                        .encode(&slot.obs[base + p], &mut f[p * OBS_DIM..(p + 1) * OBS_DIM]);
-                }
+                teams.push((slot.m.seed(), &slot.obs[base..base + PLAYERS_PER_TEAM]));
+                at.push(j);
             }
-            actor.act_rows(&self.opp_feats, &mut self.opp_actions);
-            true
-        } else {
-            false
-        };
+            if teams.is_empty() {
+                continue;
+            }
+            acts.resize(teams.len() * PLAYERS_PER_TEAM, 0);
+            actor.act_teams(&teams, &mut acts);
+            for (i, &j) in at.iter().enumerate() {
+                self.opp_actions[j * PLAYERS_PER_TEAM..(j + 1) * PLAYERS_PER_TEAM]
+                    .copy_from_slice(&acts[i * PLAYERS_PER_TEAM..(i + 1) * PLAYERS_PER_TEAM]);
+            }
+        }
         let threads = self.env.threads.clamp(1, self.env.matches);
         let per = self.env.matches.div_ceil(threads);
         let cfg = &self.cfg;
         let env = &self.env;
         let scale = &self.scale;
-        let opp_kind = self.opponent.builtin_kind();
-        let opp_actions: &[usize] = if net_opponent { &self.opp_actions } else { &[] };
+        let mix = &self.mix;
+        let opp_actions: &[usize] = &self.opp_actions;
         let work = self
             .slots
             .chunks_mut(per)
@@ -268,7 +390,7 @@ impl VecEnv {
                     cfg,
                     env,
                     scale,
-                    opp_kind,
+                    mix,
                     slots,
                     a,
                     opp_chunk(opp_actions, c, per),
@@ -283,9 +405,7 @@ impl VecEnv {
                 let handles: Vec<_> = work
                     .map(|(c, ((((slots, a), f), r), d))| {
                         let opp = opp_chunk(opp_actions, c, per);
-                        s.spawn(move || {
-                            step_chunk(cfg, env, scale, opp_kind, slots, a, opp, f, r, d)
-                        })
+                        s.spawn(move || step_chunk(cfg, env, scale, mix, slots, a, opp, f, r, d))
                     })
                     .collect();
                 handles
@@ -307,9 +427,6 @@ impl VecEnv {
 }
 
 fn opp_chunk(opp: &[usize], chunk: usize, per: usize) -> &[usize] {
-    if opp.is_empty() {
-        return opp;
-    }
     let n = per * PLAYERS_PER_TEAM;
     let start = (chunk * n).min(opp.len());
     &opp[start..(start + n).min(opp.len())]
@@ -320,7 +437,7 @@ fn step_chunk(
     cfg: &MatchConfig,
     env: &EnvConfig,
     scale: &ObsScale,
-    opp_kind: Option<PolicyKind>,
+    mix: &Mix,
     slots: &mut [Slot],
     actions: &[usize],
     opp_actions: &[usize],
@@ -330,11 +447,10 @@ fn step_chunk(
 ) -> Result<(), LearnError> {
     let l = env.learners.len();
     for (j, slot) in slots.iter_mut().enumerate() {
-        let opp = if opp_actions.is_empty() {
-            None
-        } else {
-            Some(&opp_actions[j * PLAYERS_PER_TEAM..(j + 1) * PLAYERS_PER_TEAM])
-        };
+        // A network opponent's actions came from its batched forward pass.
+        let opp = mix.kinds[slot.opp]
+            .is_none()
+            .then(|| &opp_actions[j * PLAYERS_PER_TEAM..(j + 1) * PLAYERS_PER_TEAM]);
         let done = slot.step(
             env,
             &actions[j * l..(j + 1) * l],
@@ -343,7 +459,7 @@ fn step_chunk(
         );
         dones[j * l..(j + 1) * l].fill(done);
         if done {
-            slot.restart(cfg, env, opp_kind)?;
+            slot.restart(cfg, env, mix)?;
         }
         slot.encode_learners(
             &env.learners,
@@ -355,9 +471,11 @@ fn step_chunk(
 }
 
 impl Slot {
-    /// Fresh built-in policies for this episode (they are seeded by the match
-    /// seed); `opp_kind` is `None` when a network plays the opponents.
-    fn build_policies(&mut self, env: &EnvConfig, opp_kind: Option<PolicyKind>) {
+    /// Draws this episode's opponent and builds fresh built-in policies for
+    /// it (they are seeded by the match seed; none where a network plays).
+    fn build_policies(&mut self, env: &EnvConfig, mix: &Mix) {
+        self.opp = mix.pick(env.seed, self.index, self.episode);
+        let opp_kind = mix.kinds[self.opp];
         let seed = self.m.seed();
         self.policies = RobotId::all()
             .map(|r| {
@@ -423,12 +541,7 @@ impl Slot {
         self.m.is_finished()
     }
 
-    fn restart(
-        &mut self,
-        cfg: &MatchConfig,
-        env: &EnvConfig,
-        opp_kind: Option<PolicyKind>,
-    ) -> Result<(), LearnError> {
+    fn restart(&mut self, cfg: &MatchConfig, env: &EnvConfig, mix: &Mix) -> Result<(), LearnError> {
         let (blue, red) = self.m.score();
         let (gf, ga) = if self.team == Team::Blue {
             (blue, red)
@@ -446,7 +559,7 @@ impl Slot {
         });
         self.episode += 1;
         self.m = Match::new(cfg, episode_seed(env.seed, self.index, self.episode))?;
-        self.build_policies(env, opp_kind);
+        self.build_policies(env, mix);
         self.observe_all();
         Ok(())
     }

@@ -17,8 +17,7 @@ use naosoccer_proto::{Action, MatchStats, Observation, RobotId, Team, PLAYERS_PE
 use naosoccer_referee::{Match, MatchConfig};
 
 use crate::env::legacy_episode_seed;
-use crate::obs::OBS_DIM;
-use crate::policy::{sample_uniform, LearnedPolicy};
+use crate::policy::LearnedPolicy;
 use crate::LearnError;
 
 /// One side of an evaluation.
@@ -186,9 +185,6 @@ pub fn play_matches(
         observe_all(&mut slot);
         slots.push(slot);
     }
-    let mut feats = Vec::new();
-    let mut players = Vec::new();
-    let mut uniforms = Vec::new();
     let mut acts = Vec::new();
     while slots.iter().any(|s| !s.m.is_finished()) {
         for (is_first, side) in [(true, &mut *first), (false, &mut *second)] {
@@ -199,23 +195,21 @@ pub fn play_matches(
                 .filter(|&i| !slots[i].m.is_finished())
                 .collect();
             let n = live.len() * PLAYERS_PER_TEAM;
-            feats.resize(n * OBS_DIM, 0.0);
-            players.clear();
-            uniforms.clear();
             acts.resize(n, 0usize);
-            let scale = policy.scale();
-            for (j, &i) in live.iter().enumerate() {
-                let team = team_of(&slots[i], is_first);
-                for p in 0..PLAYERS_PER_TEAM {
-                    let row = j * PLAYERS_PER_TEAM + p;
-                    let obs = &slots[i].obs[team.index() * PLAYERS_PER_TEAM + p];
-                    scale.encode(obs, &mut feats[row * OBS_DIM..(row + 1) * OBS_DIM]);
-                    players.push(p);
-                    // Keyed as a policy playing this one match would key it.
-                    uniforms.push(sample_uniform(slots[i].m.seed(), team.index(), p, obs.tick));
-                }
-            }
-            policy.act_rows_keyed(&feats, &players, &uniforms, &mut acts);
+            // Each match's team as one policy playing that match would see
+            // it: draws keyed by (match seed, team, player, tick), and the
+            // decision-level MDP's per-robot holds kept by the policy.
+            let teams: Vec<(u64, &[Observation])> = live
+                .iter()
+                .map(|&i| {
+                    let base = team_of(&slots[i], is_first).index() * PLAYERS_PER_TEAM;
+                    (
+                        slots[i].m.seed(),
+                        &slots[i].obs[base..base + PLAYERS_PER_TEAM],
+                    )
+                })
+                .collect();
+            policy.act_matches(&teams, &mut acts);
             for (j, &i) in live.iter().enumerate() {
                 let team = team_of(&slots[i], is_first);
                 for p in 0..PLAYERS_PER_TEAM {

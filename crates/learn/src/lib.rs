@@ -5,6 +5,7 @@
 //!   robots flattened into one batch; built-in, frozen or self-play opponents.
 //! - [`ppo`], [`dqn`]: the two algorithms as the paper describes them (PPO
 //!   also with a CleanRL preset).
+//! - [`schedule`]: opponent curricula and the pool of past snapshots.
 //! - [`train`]: training runs (config, metrics CSV, safetensors checkpoints).
 //! - [`policy`]: trained networks as the client's `Policy` ([`load_policy`]).
 //! - [`eval`]: many matches between two teams; Table I with 95% CIs.
@@ -13,6 +14,7 @@
 //! The reward is the referee's (`Match::rewards`): its weights are part of the
 //! match configuration.
 
+pub mod adam;
 pub mod dqn;
 pub mod env;
 mod error;
@@ -22,6 +24,7 @@ pub mod obs;
 pub mod plot;
 pub mod policy;
 pub mod ppo;
+pub mod schedule;
 pub mod train;
 
 pub use error::LearnError;

@@ -1,27 +1,69 @@
 //! The observation vector: `proto::Observation` flattened into the fixed f32
 //! layout the networks read. Versioned: a checkpoint records the version it
-//! was trained on and refuses to load under another. docs/LEARNING.md lists
-//! the same layout; a test checks the two agree.
+//! was trained on and refuses to load under a version this build cannot
+//! encode. docs/LEARNING.md lists both layouts; a test checks they agree.
 //!
-//! Everything is in the acting team's frame (the referee mirrors red's view,
-//! so a team always attacks +x), positions divided by the half-field sizes so
-//! the pitch spans [-1, 1] in both axes.
+//! - Version 2 (current, [`OBS_DIM`] = 75 entries): egocentric first. The
+//!   acting robot, then the ball seen from it at kick-reach resolution, the
+//!   two goals seen from it, the ball, the other three teammates, the
+//!   opponents, and the game state (clock, half, score, set play, role).
+//! - Version 1 (48 entries, the shipped `paper`/`cleanrl`/DQN teams): the
+//!   paper's state in the team frame. Still encoded so those teams play.
+//!
+//! Rows are always [`OBS_DIM`] wide; a narrower layout fills a prefix and
+//! zeroes the rest, and its networks read the prefix ([`ObsScale::dim`]).
+//!
+//! Everything is computed from the `proto::Observation` alone, so a robot
+//! playing over the socket sees exactly what it saw in training. Positions
+//! are in the acting team's frame (the referee mirrors red's view, so a team
+//! always attacks +x).
 
 use naosoccer_proto::{Observation, RobotObs, PLAYERS_PER_TEAM};
 use serde::{Deserialize, Serialize};
 
-/// Bumped whenever the layout below changes.
-pub const OBS_VERSION: u32 = 1;
+/// The layout new runs are trained on; bumped whenever a layout is added.
+pub const OBS_VERSION: u32 = 2;
 
-/// Length of the observation vector.
-pub const OBS_DIM: usize = 48;
+/// Row width of observation buffers: the widest layout's length.
+pub const OBS_DIM: usize = 75;
+
+/// Length of layout version 1.
+pub const OBS_DIM_V1: usize = 48;
 
 /// Ball speeds are divided by this (m/s): a hard kick is a few m/s.
 pub const BALL_SPEED_SCALE: f32 = 2.0;
 
-/// The name of every entry, in order, as docs/LEARNING.md lists them.
+/// The ball in the robot frame (`ball_ahead`, `ball_side`) is divided by this
+/// (metres) and clamped to +-[`NEAR_CLAMP`]: 1 cm is 0.04 input units.
+pub const NEAR_SCALE: f32 = 0.25;
+pub const NEAR_CLAMP: f32 = 4.0;
+
+/// Set-play ticks left are divided by this.
+pub const SET_PLAY_TICKS_SCALE: f32 = 100.0;
+
+/// The entries of layout version 2, in order, as docs/LEARNING.md lists them.
 #[rustfmt::skip]
 pub const FEATURE_NAMES: [&str; OBS_DIM] = [
+    "me_x", "me_y", "me_cos", "me_sin", "me_fallen", "me_busy", "me_control",
+    "ball_dist", "ball_cos", "ball_sin", "ball_ahead", "ball_side", "ball_in_reach",
+    "goal_dist", "goal_cos", "goal_sin", "own_goal_dist", "own_goal_cos", "own_goal_sin",
+    "ball_x", "ball_y", "ball_vx", "ball_vy",
+    "mate1_x", "mate1_y", "mate1_cos", "mate1_sin", "mate1_fallen", "mate1_control",
+    "mate2_x", "mate2_y", "mate2_cos", "mate2_sin", "mate2_fallen", "mate2_control",
+    "mate3_x", "mate3_y", "mate3_cos", "mate3_sin", "mate3_fallen", "mate3_control",
+    "opp0_x", "opp0_y", "opp0_cos", "opp0_sin", "opp0_fallen",
+    "opp1_x", "opp1_y", "opp1_cos", "opp1_sin", "opp1_fallen",
+    "opp2_x", "opp2_y", "opp2_cos", "opp2_sin", "opp2_fallen",
+    "opp3_x", "opp3_y", "opp3_cos", "opp3_sin", "opp3_fallen",
+    "opp_control",
+    "time_left", "second_half", "score_diff",
+    "sp_kick_off", "sp_kick_in", "sp_goal_kick", "sp_corner_kick", "sp_own", "sp_ticks_left",
+    "me0", "me1", "me2", "me3",
+];
+
+/// The entries of layout version 1, in order.
+#[rustfmt::skip]
+pub const FEATURE_NAMES_V1: [&str; OBS_DIM_V1] = [
     "own0_x", "own0_y", "own0_cos", "own0_sin",
     "own1_x", "own1_y", "own1_cos", "own1_sin",
     "own2_x", "own2_y", "own2_cos", "own2_sin",
@@ -38,32 +80,203 @@ pub const FEATURE_NAMES: [&str; OBS_DIM] = [
     "me_fallen",
 ];
 
-/// How positions are normalised: the pitch's half sizes in metres. Stored in
-/// every checkpoint, so a policy normalises as it was trained.
+/// The layout length of `version`, `None` for a version this build cannot encode.
+pub fn layout_dim(version: u32) -> Option<usize> {
+    match version {
+        1 => Some(OBS_DIM_V1),
+        2 => Some(OBS_DIM),
+        _ => None,
+    }
+}
+
+fn one() -> u32 {
+    1
+}
+
+/// Where a kick reaches (the sim's `kick_reach_min/max`, `kick_half_width`,
+/// metres): the ball centre must lie this far ahead of the robot's origin
+/// and within the half width to either side.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct KickReach {
+    pub min: f32,
+    pub max: f32,
+    pub half_width: f32,
+}
+
+impl Default for KickReach {
+    fn default() -> KickReach {
+        let s = naosoccer_referee::MatchConfig::default().sim;
+        KickReach {
+            min: s.kick_reach_min,
+            max: s.kick_reach_max,
+            half_width: s.kick_half_width,
+        }
+    }
+}
+
+impl KickReach {
+    /// Whether a ball `ahead` metres in front and `side` to the left is in reach.
+    pub fn contains(&self, ahead: f32, side: f32) -> bool {
+        ahead >= self.min && ahead <= self.max && side.abs() <= self.half_width
+    }
+
+    /// Whether the robot that received `obs` has the ball in kick reach.
+    pub fn in_reach(&self, obs: &Observation) -> bool {
+        let (ahead, side) = ball_in_robot_frame(obs);
+        self.contains(ahead, side)
+    }
+}
+
+fn default_match_seconds() -> f32 {
+    600.0
+}
+
+/// The ball relative to the robot that received `obs`: metres ahead along
+/// its heading and to its left.
+pub fn ball_in_robot_frame(obs: &Observation) -> (f32, f32) {
+    let r = obs.me();
+    let (dx, dy) = (obs.ball.x - r.x, obs.ball.y - r.y);
+    let (s, c) = r.heading.sin_cos();
+    (c * dx + s * dy, -s * dx + c * dy)
+}
+
+/// How observations are encoded: the layout version and the scales it uses.
+/// Stored in every checkpoint's configuration, so a policy encodes as it was
+/// trained. (Configurations written before version 2 hold only the half
+/// sizes; the other fields then take their defaults.)
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ObsScale {
     pub half_length: f32,
     pub half_width: f32,
+    /// Layout version; set from the run's `obs_version` when loading.
+    #[serde(default = "one")]
+    pub version: u32,
+    #[serde(default)]
+    pub kick: KickReach,
+    /// The match length, seconds (`time_left` is divided by it).
+    #[serde(default = "default_match_seconds")]
+    pub match_seconds: f32,
 }
 
 impl ObsScale {
+    /// The current layout for matches configured as `cfg`.
     pub fn from_config(cfg: &naosoccer_referee::MatchConfig) -> ObsScale {
         let f = naosoccer_referee::Field::from_sim(&cfg.sim);
         ObsScale {
             half_length: f.half_length,
             half_width: f.half_width,
+            version: OBS_VERSION,
+            kick: KickReach {
+                min: cfg.sim.kick_reach_min,
+                max: cfg.sim.kick_reach_max,
+                half_width: cfg.sim.kick_half_width,
+            },
+            match_seconds: (cfg.minutes * 60.0).max(1e-3),
         }
     }
 
+    /// This layout's length (the prefix of each row the networks read).
+    pub fn dim(&self) -> usize {
+        layout_dim(self.version).unwrap_or(OBS_DIM)
+    }
+
     /// Writes the observation vector for the robot that received `obs` into
-    /// `out` (length [`OBS_DIM`]). Allocation-free: training calls this for
-    /// every robot every tick.
+    /// `out` (length [`OBS_DIM`]; a shorter layout zeroes the tail).
+    /// Allocation-free: training calls this for every robot every tick.
     pub fn encode(&self, obs: &Observation, out: &mut [f32]) {
         assert_eq!(
             out.len(),
             OBS_DIM,
             "observation buffer must hold OBS_DIM values"
         );
+        match self.version {
+            1 => {
+                self.encode_v1(obs, &mut out[..OBS_DIM_V1]);
+                out[OBS_DIM_V1..].fill(0.0);
+            }
+            _ => self.encode_v2(obs, out),
+        }
+    }
+
+    fn encode_v2(&self, obs: &Observation, out: &mut [f32]) {
+        let (sx, sy) = (1.0 / self.half_length, 1.0 / self.half_width);
+        let me = obs.player as usize % PLAYERS_PER_TEAM;
+        let r = obs.me();
+        let (s, c) = r.heading.sin_cos();
+        let flag = |b: bool| f32::from(u8::from(b));
+        // Distance and bearing (cos, sin relative to the heading) of a point.
+        let seen = |x: f32, y: f32| -> (f32, f32, f32) {
+            let (dx, dy) = (x - r.x, y - r.y);
+            let d = (dx * dx + dy * dy).sqrt();
+            if d < 1e-6 {
+                return (0.0, 1.0, 0.0);
+            }
+            let (fwd, left) = (c * dx + s * dy, -s * dx + c * dy);
+            (d, fwd / d, left / d)
+        };
+        out[0] = r.x * sx;
+        out[1] = r.y * sy;
+        out[2] = c;
+        out[3] = s;
+        out[4] = flag(r.fallen);
+        out[5] = flag(r.busy);
+        out[6] = flag(obs.control[me]);
+        let (d, bc, bs) = seen(obs.ball.x, obs.ball.y);
+        let (ahead, side) = ball_in_robot_frame(obs);
+        out[7] = d * sx;
+        out[8] = bc;
+        out[9] = bs;
+        out[10] = (ahead / NEAR_SCALE).clamp(-NEAR_CLAMP, NEAR_CLAMP);
+        out[11] = (side / NEAR_SCALE).clamp(-NEAR_CLAMP, NEAR_CLAMP);
+        out[12] = flag(self.kick.contains(ahead, side));
+        let (d, gc, gs) = seen(self.half_length, 0.0);
+        out[13] = d * sx * 0.5;
+        out[14] = gc;
+        out[15] = gs;
+        let (d, gc, gs) = seen(-self.half_length, 0.0);
+        out[16] = d * sx * 0.5;
+        out[17] = gc;
+        out[18] = gs;
+        out[19] = obs.ball.x * sx;
+        out[20] = obs.ball.y * sy;
+        out[21] = obs.ball.vx / BALL_SPEED_SCALE;
+        out[22] = obs.ball.vy / BALL_SPEED_SCALE;
+        let mut i = 23;
+        for p in (0..PLAYERS_PER_TEAM).filter(|&p| p != me) {
+            let m = &obs.own[p];
+            out[i] = m.x * sx;
+            out[i + 1] = m.y * sy;
+            out[i + 2] = m.heading.cos();
+            out[i + 3] = m.heading.sin();
+            out[i + 4] = flag(m.fallen);
+            out[i + 5] = flag(obs.control[p]);
+            i += 6;
+        }
+        for o in &obs.opponents {
+            out[i] = o.x * sx;
+            out[i + 1] = o.y * sy;
+            out[i + 2] = o.heading.cos();
+            out[i + 3] = o.heading.sin();
+            out[i + 4] = flag(o.fallen);
+            i += 5;
+        }
+        out[61] = flag(obs.opponent_control);
+        out[62] = (obs.time_left / self.match_seconds).clamp(0.0, 1.0);
+        out[63] = flag(obs.half >= 2);
+        let diff = obs.score.own as f32 - obs.score.opponent as f32;
+        out[64] = (diff / 2.0).tanh();
+        out[65..71].fill(0.0);
+        if let Some(sp) = &obs.set_play {
+            out[65 + sp.kind.index()] = 1.0;
+            out[69] = flag(sp.own);
+            out[70] = (sp.ticks_left as f32 / SET_PLAY_TICKS_SCALE).min(1.0);
+        }
+        for p in 0..PLAYERS_PER_TEAM {
+            out[71 + p] = flag(p == me);
+        }
+    }
+
+    fn encode_v1(&self, obs: &Observation, out: &mut [f32]) {
         let (sx, sy) = (1.0 / self.half_length, 1.0 / self.half_width);
         let robot = |r: &RobotObs, dst: &mut [f32]| {
             dst[0] = r.x * sx;
@@ -88,12 +301,10 @@ impl ObsScale {
         // The ball seen from the acting robot (forward, left), which the
         // rotation decisions hinge on; the network could derive it, but only
         // through a product of inputs that small MLPs learn slowly.
-        let r = &obs.own[me];
-        let (dx, dy) = (obs.ball.x - r.x, obs.ball.y - r.y);
-        let (s, c) = r.heading.sin_cos();
-        out[45] = (c * dx + s * dy) * sx;
-        out[46] = (-s * dx + c * dy) * sx;
-        out[47] = f32::from(u8::from(r.fallen));
+        let (fwd, left) = ball_in_robot_frame(obs);
+        out[45] = fwd * sx;
+        out[46] = left * sx;
+        out[47] = f32::from(u8::from(obs.me().fallen));
     }
 }
 
@@ -102,15 +313,15 @@ mod tests {
     use super::*;
     use naosoccer_proto::{BallObs, ScoreObs, Team};
 
-    /// The observation-layout table of docs/LEARNING.md: rows `| index | name | ... |`
-    /// between the two layout markers.
-    fn documented_layout() -> Vec<(usize, String)> {
+    /// An observation-layout table of docs/LEARNING.md: rows `| index | name | ... |`
+    /// between the markers `<!-- TAG:begin -->` and `<!-- TAG:end -->`.
+    fn documented_layout(tag: &str) -> Vec<(usize, String)> {
         let doc = include_str!("../../../docs/LEARNING.md");
         let start = doc
-            .find("<!-- obs-layout:begin -->")
+            .find(&format!("<!-- {tag}:begin -->"))
             .expect("layout start marker in docs/LEARNING.md");
         let end = doc
-            .find("<!-- obs-layout:end -->")
+            .find(&format!("<!-- {tag}:end -->"))
             .expect("layout end marker in docs/LEARNING.md");
         doc[start..end]
             .lines()
@@ -123,17 +334,23 @@ mod tests {
     }
 
     #[test]
-    fn layout_matches_its_documentation() {
-        let doc = documented_layout();
-        assert_eq!(
-            doc.len(),
-            OBS_DIM,
-            "docs/LEARNING.md lists every entry once"
-        );
-        for (i, (index, name)) in doc.iter().enumerate() {
-            assert_eq!(*index, i, "entries in order");
-            assert_eq!(name, FEATURE_NAMES[i], "entry {i}");
+    fn layouts_match_their_documentation() {
+        for (tag, names) in [
+            ("obs-layout", &FEATURE_NAMES[..]),
+            ("obs-layout-v1", &FEATURE_NAMES_V1[..]),
+        ] {
+            let doc = documented_layout(tag);
+            assert_eq!(
+                doc.len(),
+                names.len(),
+                "docs/LEARNING.md lists every entry of {tag} once"
+            );
+            for (i, (index, name)) in doc.iter().enumerate() {
+                assert_eq!(*index, i, "{tag}: entries in order");
+                assert_eq!(name, names[i], "{tag}: entry {i}");
+            }
         }
+        assert_eq!(layout_dim(OBS_VERSION), Some(OBS_DIM));
         let doc = include_str!("../../../docs/LEARNING.md");
         assert!(
             doc.contains(&format!("version {OBS_VERSION}")),
@@ -142,15 +359,28 @@ mod tests {
     }
 
     fn named(v: &[f32], name: &str) -> f32 {
+        v[FEATURE_NAMES_V1.iter().position(|n| *n == name).unwrap()]
+    }
+
+    fn named2(v: &[f32], name: &str) -> f32 {
         v[FEATURE_NAMES.iter().position(|n| *n == name).unwrap()]
     }
 
-    #[test]
-    fn encoding_puts_each_quantity_where_documented() {
-        let scale = ObsScale {
+    fn test_scale(version: u32) -> ObsScale {
+        ObsScale {
             half_length: 3.0,
             half_width: 2.25,
-        };
+            version,
+            kick: KickReach {
+                min: 0.1,
+                max: 0.26,
+                half_width: 0.11,
+            },
+            match_seconds: 600.0,
+        }
+    }
+
+    fn sample_observation() -> Observation {
         let robot = |x: f32, y: f32, heading: f32, fallen: bool| RobotObs {
             x,
             y,
@@ -158,7 +388,7 @@ mod tests {
             fallen,
             busy: false,
         };
-        let obs = Observation {
+        Observation {
             tick: 7,
             team: Team::Red,
             player: 2,
@@ -190,7 +420,13 @@ mod tests {
             reward: 0.0,
             half: 1,
             set_play: None,
-        };
+        }
+    }
+
+    #[test]
+    fn version_1_encoding_puts_each_quantity_where_documented() {
+        let scale = test_scale(1);
+        let obs = sample_observation();
         let mut v = [0.0; OBS_DIM];
         scale.encode(&obs, &mut v);
         let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
@@ -222,5 +458,73 @@ mod tests {
         );
         assert!(close(named(&v, "ball_left"), 0.0));
         assert_eq!(named(&v, "me_fallen"), 1.0);
+    }
+
+    #[test]
+    fn version_1_rows_zero_the_tail() {
+        let mut v = [7.0; OBS_DIM];
+        test_scale(1).encode(&sample_observation(), &mut v);
+        assert!(v[OBS_DIM_V1..].iter().all(|&x| x == 0.0));
+        assert_eq!(test_scale(1).dim(), OBS_DIM_V1);
+    }
+
+    #[test]
+    fn version_2_encoding_puts_each_quantity_where_documented() {
+        use naosoccer_proto::{SetPlayKind, SetPlayObs};
+        let scale = test_scale(2);
+        let mut obs = sample_observation();
+        // Player 2 at (1, -1) facing -x, busy; the ball 20 cm ahead of it and
+        // 5 cm to its left (its left is -y): in kick reach.
+        obs.own[2].busy = true;
+        obs.ball.x = 0.8;
+        obs.ball.y = -0.95;
+        obs.half = 2;
+        obs.score = ScoreObs {
+            own: 1,
+            opponent: 3,
+        };
+        obs.set_play = Some(SetPlayObs {
+            kind: SetPlayKind::GoalKick,
+            own: true,
+            ticks_left: 50,
+        });
+        let mut v = [0.0; OBS_DIM];
+        scale.encode(&obs, &mut v);
+        let n = |name: &str| named2(&v, name);
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+        assert!(close(n("me_x"), 1.0 / 3.0) && close(n("me_y"), -1.0 / 2.25));
+        assert!(close(n("me_cos"), -1.0));
+        assert_eq!([n("me_fallen"), n("me_busy"), n("me_control")], [1.0; 3]);
+        let d = (0.2f32 * 0.2 + 0.05 * 0.05).sqrt();
+        assert!(close(n("ball_dist"), d / 3.0));
+        assert!(close(n("ball_cos"), 0.2 / d) && close(n("ball_sin"), -0.05 / d));
+        // 1 cm is visible: 0.04 units.
+        assert!(close(n("ball_ahead"), 0.8) && close(n("ball_side"), -0.2));
+        assert_eq!(n("ball_in_reach"), 1.0);
+        // The opponent goal (3, 0) is 2 m behind and 1 m to the right of it.
+        let g = 5.0f32.sqrt();
+        assert!(close(n("goal_dist"), g / 6.0));
+        assert!(close(n("goal_cos"), -2.0 / g) && close(n("goal_sin"), -1.0 / g));
+        let og = 17.0f32.sqrt();
+        assert!(close(n("own_goal_cos"), 4.0 / og) && close(n("own_goal_sin"), -1.0 / og));
+        // The teammates are players 0, 1 and 3, in that order.
+        assert!(close(n("mate1_x"), -0.9) && close(n("mate2_y"), 0.5));
+        assert!(close(n("mate2_sin"), 1.0) && close(n("mate3_x"), 0.0));
+        assert!(close(n("opp3_sin"), -1.0) && close(n("opp0_y"), 1.0));
+        assert!(close(n("ball_vx"), 0.5));
+        assert!(close(n("time_left"), 100.0 / 600.0));
+        assert_eq!(n("second_half"), 1.0);
+        assert!(close(n("score_diff"), (-1.0f32).tanh()));
+        assert_eq!(
+            [n("sp_kick_off"), n("sp_goal_kick"), n("sp_own")],
+            [0.0, 1.0, 1.0]
+        );
+        assert!(close(n("sp_ticks_left"), 0.5));
+        assert_eq!([n("me0"), n("me2")], [0.0, 1.0]);
+        // Turned away by 90 degrees, the ball is out of reach.
+        obs.own[2].heading = std::f32::consts::FRAC_PI_2;
+        scale.encode(&obs, &mut v);
+        assert_eq!(named2(&v, "ball_in_reach"), 0.0);
+        assert!(!scale.kick.in_reach(&obs));
     }
 }

@@ -16,6 +16,7 @@
 //! says how to rebuild the networks) and `final.safetensors` (or, while a run
 //! is going, `checkpoints/step-N.safetensors`).
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use naosoccer_client::Policy;
@@ -25,8 +26,8 @@ use tch::{Kind, Tensor};
 
 use crate::dqn::{argmax, QNet};
 use crate::env::BatchActor;
-use crate::obs::{ObsScale, OBS_DIM, OBS_VERSION};
-use crate::ppo::{ActorCritic, ACTIONS};
+use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
+use crate::ppo::{rows_tensor, shoot_mask, ActorCritic, DecisionConfig, ACTIONS, SHOOT, STAY};
 use crate::train::{Algo, TrainConfig};
 use crate::LearnError;
 
@@ -56,6 +57,66 @@ pub fn sample_uniform(match_seed: u64, team: usize, player: usize, tick: u64) ->
     (z >> 40) as f32 / (1u64 << 24) as f32
 }
 
+/// One robot's decision state in the decision-level MDP (`team` preset):
+/// the action it holds and until which tick. The trainer and
+/// [`LearnedPolicy`] both use it, so a team decides in play exactly when it
+/// decided in training, in process or over the socket.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Hold {
+    action: usize,
+    until: u64,
+    last_tick: Option<u64>,
+}
+
+impl Hold {
+    /// Whether the robot that received `obs` decides now: it is free to act
+    /// (not lying, not busy in a kick) and its last decision's persistence
+    /// has run out. A tick earlier than the last one seen is a new match.
+    pub fn must_decide(&mut self, obs: &Observation) -> bool {
+        if self.last_tick.is_some_and(|t| obs.tick < t) {
+            *self = Hold::default();
+        }
+        self.last_tick = Some(obs.tick);
+        is_free(obs) && obs.tick >= self.until
+    }
+
+    /// The action of a robot that does not decide now: what it holds while
+    /// free, `stay` while lying or kicking (its action is ignored then).
+    pub fn held(&self, obs: &Observation) -> usize {
+        if is_free(obs) {
+            self.action
+        } else {
+            STAY
+        }
+    }
+
+    /// Records a decision at `tick`: a movement lasts `persist` ticks, a
+    /// `shoot` one (the kick then keeps the robot busy).
+    pub fn start(&mut self, action: usize, tick: u64, persist: u32) {
+        self.action = action;
+        let ticks = if action == SHOOT {
+            1
+        } else {
+            u64::from(persist.max(1))
+        };
+        self.until = tick + ticks;
+    }
+
+    /// Forgets the hold (the episode ended).
+    pub fn reset(&mut self) {
+        *self = Hold::default();
+    }
+}
+
+/// Not lying and not in a kick.
+pub fn is_free(obs: &Observation) -> bool {
+    let me = obs.me();
+    !me.fallen && !me.busy
+}
+
+/// Feature index of `ball_in_reach` in layout version 2.
+const IN_REACH_FEATURE: usize = 12;
+
 enum Model {
     Ppo(ActorCritic),
     /// One network per entry of `learners`, or one shared.
@@ -79,6 +140,10 @@ pub struct LearnedPolicy {
     out: Vec<f32>,
     players: Vec<usize>,
     keys: Vec<f32>,
+    /// The decision-level MDP the team was trained in, if any.
+    decision: Option<DecisionConfig>,
+    /// Per robot (match seed, team, player) decision state.
+    holds: BTreeMap<(u64, usize, usize), Hold>,
 }
 
 impl std::fmt::Debug for LearnedPolicy {
@@ -176,7 +241,7 @@ impl LearnedPolicy {
         if cfg.algo != algo {
             return Err(bad(&format!("{} was trained with {}", path, cfg.algo)));
         }
-        if cfg.obs_version != OBS_VERSION {
+        if layout_dim(cfg.obs_version).is_none() {
             return Err(LearnError::ObsVersion {
                 path: cfg_path,
                 found: cfg.obs_version,
@@ -197,8 +262,10 @@ impl LearnedPolicy {
 
     /// The networks `cfg` describes, freshly initialised.
     pub fn untrained(cfg: &TrainConfig, name: String) -> LearnedPolicy {
+        let mut scale = cfg.obs_scale;
+        scale.version = cfg.obs_version;
         let model = match cfg.algo {
-            Algo::Ppo => Model::Ppo(ActorCritic::new(&cfg.ppo)),
+            Algo::Ppo => Model::Ppo(ActorCritic::for_run(&cfg.ppo, &scale, cfg.learners.len())),
             Algo::Dqn => {
                 let n = if cfg.dqn.shared {
                     1
@@ -207,14 +274,14 @@ impl LearnedPolicy {
                 };
                 Model::Dqn(
                     (0..n)
-                        .map(|i| QNet::new(&cfg.dqn.hidden, &format!("q{i}")))
+                        .map(|i| QNet::with_input(scale.dim(), &cfg.dqn.hidden, &format!("q{i}")))
                         .collect(),
                 )
             }
         };
         LearnedPolicy {
             name,
-            scale: cfg.obs_scale,
+            scale,
             learners: cfg.learners.clone(),
             model,
             mode: ActMode::Greedy,
@@ -225,7 +292,88 @@ impl LearnedPolicy {
             out: Vec::new(),
             players: Vec::new(),
             keys: Vec::new(),
+            decision: match cfg.algo {
+                Algo::Ppo => cfg.ppo.decision,
+                Algo::Dqn => None,
+            },
+            holds: BTreeMap::new(),
         }
+    }
+
+    /// The decision-level MDP this team plays in (`None`: it decides every tick).
+    pub fn decision(&self) -> Option<DecisionConfig> {
+        self.decision
+    }
+
+    /// Whether `shoot` is masked while the ball is out of reach (read from
+    /// the `ball_in_reach` feature of layout version 2).
+    fn masks_shoot(&self) -> bool {
+        self.decision.is_some_and(|d| d.mask_shoot) && self.scale.version >= 2
+    }
+
+    /// Actions for whole teams: `teams[i]` is a match's seed and its team's
+    /// observations; `out` gets one action index per observation, in order.
+    /// This is how the team plays everywhere (robot and team connections,
+    /// evaluation, self-play): sampling draws from
+    /// [`sample_uniform`]`(match seed, team, player, tick)`, and under the
+    /// decision-level MDP each robot (keyed by match seed, team and player)
+    /// decides only when free and when its last decision's persistence ran
+    /// out, holding its action in between.
+    pub fn act_matches(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]) {
+        let n: usize = teams.iter().map(|t| t.1.len()).sum();
+        assert!(out.len() >= n, "one action per observation");
+        let mut feats = std::mem::take(&mut self.feats);
+        let mut players = std::mem::take(&mut self.players);
+        let mut keys = std::mem::take(&mut self.keys);
+        feats.clear();
+        players.clear();
+        keys.clear();
+        // Rows that decide now: (index into out, hold key, tick).
+        let mut deciding: Vec<(usize, (u64, usize, usize), u64)> = Vec::with_capacity(n);
+        let mut i = 0;
+        for &(seed, obs) in teams {
+            for o in obs {
+                let key = (seed, o.team.index(), o.player as usize % PLAYERS_PER_TEAM);
+                let decides = match self.decision {
+                    None => true,
+                    Some(_) => {
+                        let h = self.holds.entry(key).or_default();
+                        let d = h.must_decide(o);
+                        if !d {
+                            out[i] = h.held(o);
+                        }
+                        d
+                    }
+                };
+                if decides {
+                    let row = feats.len();
+                    feats.resize(row + OBS_DIM, 0.0);
+                    self.scale.encode(o, &mut feats[row..row + OBS_DIM]);
+                    players.push(key.2);
+                    keys.push(sample_uniform(seed, key.1, key.2, o.tick));
+                    deciding.push((i, key, o.tick));
+                }
+                i += 1;
+            }
+        }
+        if !deciding.is_empty() {
+            let mut acts = vec![0usize; deciding.len()];
+            self.act_rows_keyed(&feats, &players, &keys, &mut acts);
+            for (&(at, key, tick), &a) in deciding.iter().zip(&acts) {
+                out[at] = a;
+                if let Some(d) = self.decision {
+                    self.holds.entry(key).or_default().start(a, tick, d.persist);
+                }
+            }
+        }
+        // Robots of matches no longer played are forgotten now and then.
+        if self.holds.len() > 4096 {
+            self.holds
+                .retain(|k, _| teams.iter().any(|&(seed, _)| seed == k.0));
+        }
+        self.feats = feats;
+        self.players = players;
+        self.keys = keys;
     }
 
     pub fn mode(&self) -> ActMode {
@@ -315,10 +463,19 @@ impl LearnedPolicy {
         let n = out.len();
         match &self.model {
             Model::Ppo(ac) => {
-                let x = Tensor::from_slice(&obs[..n * OBS_DIM]).view([n as i64, OBS_DIM as i64]);
+                let x = ac.actor_input(obs, n);
                 let sample = self.mode == ActMode::Sample;
+                let mask = self.masks_shoot().then(|| {
+                    let ok: Vec<bool> = (0..n)
+                        .map(|i| obs[i * OBS_DIM + IN_REACH_FEATURE] > 0.5)
+                        .collect();
+                    Tensor::from_slice(&shoot_mask(&ok)).view([n as i64, ACTIONS as i64])
+                });
                 let y = tch::no_grad(|| {
-                    let logits = ac.logits(&x);
+                    let mut logits = ac.logits(&x);
+                    if let Some(m) = &mask {
+                        logits = logits + m;
+                    }
                     if sample {
                         logits.softmax(-1, Kind::Float)
                     } else {
@@ -352,7 +509,7 @@ impl LearnedPolicy {
                         continue;
                     }
                     let m = idx.len();
-                    let x = Tensor::from_slice(&self.rows).view([m as i64, OBS_DIM as i64]);
+                    let x = rows_tensor(&self.rows, m, OBS_DIM, self.scale.dim());
                     let q = tch::no_grad(|| net.q(&x));
                     self.out.resize(m * ACTIONS, 0.0);
                     q.copy_data(&mut self.out, m * ACTIONS);
@@ -368,7 +525,7 @@ impl LearnedPolicy {
     /// Q-values (of the network of player `player`), `n * 5` values.
     pub fn outputs(&self, obs: &[f32], player: usize) -> Vec<f32> {
         let n = obs.len() / OBS_DIM;
-        let x = Tensor::from_slice(obs).view([n as i64, OBS_DIM as i64]);
+        let x = rows_tensor(obs, n, OBS_DIM, self.scale.dim());
         let y = tch::no_grad(|| match &self.model {
             Model::Ppo(ac) => ac.logits(&x),
             Model::Dqn(nets) => nets[net_index(&self.learners, nets.len(), player)].q(&x),
@@ -412,58 +569,22 @@ impl LearnedPolicy {
     }
 }
 
-impl LearnedPolicy {
-    /// The draw robot `obs` uses this tick.
-    fn uniform_for(&self, obs: &Observation) -> f32 {
-        sample_uniform(
-            self.match_seed,
-            obs.team.index(),
-            obs.player as usize % PLAYERS_PER_TEAM,
-            obs.tick,
-        )
-    }
-}
-
 impl Policy for LearnedPolicy {
     fn act(&mut self, obs: &Observation) -> Action {
-        let mut feats = std::mem::take(&mut self.feats);
-        feats.resize(OBS_DIM, 0.0);
-        self.scale.encode(obs, &mut feats);
         let mut out = [0usize];
-        let u = [self.uniform_for(obs)];
-        self.act_rows_keyed(
-            &feats,
-            &[obs.player as usize % PLAYERS_PER_TEAM],
-            &u,
-            &mut out,
-        );
-        self.feats = feats;
+        let seed = self.match_seed;
+        self.act_matches(&[(seed, std::slice::from_ref(obs))], &mut out);
         Action::from_index(out[0]).unwrap_or(Action::Stay)
     }
 
     fn act_batch(&mut self, obs: &[Observation], out: &mut [Action]) {
         let n = obs.len().min(out.len());
-        let mut feats = std::mem::take(&mut self.feats);
-        feats.resize(n * OBS_DIM, 0.0);
-        let mut players = std::mem::take(&mut self.players);
-        players.clear();
-        let mut keys = std::mem::take(&mut self.keys);
-        keys.clear();
-        for (i, o) in obs.iter().take(n).enumerate() {
-            self.scale
-                .encode(o, &mut feats[i * OBS_DIM..(i + 1) * OBS_DIM]);
-            players.push(o.player as usize % PLAYERS_PER_TEAM);
-            keys.push(self.uniform_for(o));
-        }
         let mut acts = vec![0usize; n];
-        self.act_rows_keyed(&feats, &players, &keys, &mut acts);
-        self.keys = keys;
+        let seed = self.match_seed;
+        self.act_matches(&[(seed, &obs[..n])], &mut acts);
         for (o, a) in out.iter_mut().zip(acts) {
             *o = Action::from_index(a).unwrap_or(Action::Stay);
         }
-        feats.truncate(OBS_DIM);
-        self.feats = feats;
-        self.players = players;
     }
 
     fn name(&self) -> &str {
@@ -472,12 +593,7 @@ impl Policy for LearnedPolicy {
 }
 
 impl BatchActor for LearnedPolicy {
-    /// Rows are whole teams in player order (`i % 4` is the player).
-    fn act_rows(&mut self, obs: &[f32], out: &mut [usize]) {
-        let mut players = std::mem::take(&mut self.players);
-        players.clear();
-        players.extend((0..out.len()).map(|i| i % PLAYERS_PER_TEAM));
-        self.act_rows_players(obs, &players, out);
-        self.players = players;
+    fn act_teams(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]) {
+        self.act_matches(teams, out);
     }
 }

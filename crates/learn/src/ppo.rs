@@ -9,6 +9,14 @@
 //! - `cleanrl`: GAE(lambda) with a bootstrapped value at the rollout's end,
 //!   per-minibatch advantage normalisation, gradient-norm clipping and
 //!   orthogonal initialisation (CleanRL's `ppo.py`).
+//! - `team`: the decision-level MDP ([`DecisionConfig`]): a robot decides
+//!   only when it is free to act, movement persists for `persist` ticks,
+//!   `shoot` is masked while the ball is out of kick reach, and returns are
+//!   discounted by the time that elapsed (`gamma^dt`, GAE with
+//!   `(gamma lambda)^dt`), bootstrapped at rollout edges; on top of
+//!   cleanrl's machinery: value normalisation, a KL early stop, learning-rate
+//!   and entropy schedules and an optional centralised critic (MAPPO: the
+//!   critic reads the whole team's observation vectors).
 
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -16,11 +24,30 @@ use serde::{Deserialize, Serialize};
 use tch::nn::{self, OptimizerConfig};
 use tch::{Kind, Tensor};
 
+use crate::adam::Adam;
 use crate::nets::{Activation, InitScheme, Mlp};
-use crate::obs::OBS_DIM;
+use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
 
 pub const ACTIONS: usize = 5;
+
+/// Index of `shoot` among the actions.
+pub const SHOOT: usize = 3;
+/// Index of `stay`.
+pub const STAY: usize = 4;
+
+/// A logit this low makes an action impossible (its probability underflows to 0).
+const MASKED_LOGIT: f32 = -1e9;
+
+/// The decision-level MDP (`team` preset).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DecisionConfig {
+    /// Ticks a movement decision (`forward`, turns, `stay`) lasts before the
+    /// robot decides again (a `shoot` lasts as long as the kick keeps it busy).
+    pub persist: u32,
+    /// `shoot` is impossible while the ball is out of kick reach.
+    pub mask_shoot: bool,
+}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -28,6 +55,7 @@ pub enum Preset {
     #[default]
     Paper,
     Cleanrl,
+    Team,
 }
 
 impl std::str::FromStr for Preset {
@@ -36,8 +64,9 @@ impl std::str::FromStr for Preset {
         match s {
             "paper" => Ok(Preset::Paper),
             "cleanrl" => Ok(Preset::Cleanrl),
+            "team" => Ok(Preset::Team),
             o => Err(format!(
-                "unknown PPO preset {o:?} (expected paper or cleanrl)"
+                "unknown PPO preset {o:?} (expected paper, cleanrl or team)"
             )),
         }
     }
@@ -67,6 +96,29 @@ pub struct PpoConfig {
     /// Gradient-norm clip (cleanrl preset), none when `None`.
     pub max_grad_norm: Option<f64>,
     pub hidden: Vec<usize>,
+    /// Stop an update's passes once the approximate KL divergence from the
+    /// rollout's policy exceeds 1.5 times this (team preset).
+    #[serde(default)]
+    pub target_kl: Option<f64>,
+    /// The critic predicts returns normalised by their running mean and
+    /// standard deviation (team preset).
+    #[serde(default)]
+    pub value_norm: bool,
+    /// Learning rates fall linearly to `lr_end_fraction` of their start
+    /// over the run (team preset); constant when `None`.
+    #[serde(default)]
+    pub lr_end_fraction: Option<f64>,
+    /// The entropy weight moves linearly from `entropy_coef` to this over the
+    /// run; constant when `None`.
+    #[serde(default)]
+    pub entropy_coef_end: Option<f64>,
+    /// MAPPO: the critic reads the observation vectors of all the team's
+    /// learning robots (the acting robot's first), not only the acting one's.
+    #[serde(default)]
+    pub central_critic: bool,
+    /// The decision-level MDP; `None`: every robot decides every tick.
+    #[serde(default)]
+    pub decision: Option<DecisionConfig>,
 }
 
 impl PpoConfig {
@@ -85,6 +137,12 @@ impl PpoConfig {
             rollout: 128,
             max_grad_norm: None,
             hidden: vec![64, 64],
+            target_kl: None,
+            value_norm: false,
+            lr_end_fraction: None,
+            entropy_coef_end: None,
+            central_critic: false,
+            decision: None,
         }
     }
 
@@ -103,6 +161,43 @@ impl PpoConfig {
             rollout: 128,
             max_grad_norm: Some(0.5),
             hidden: vec![64, 64],
+            target_kl: None,
+            value_norm: false,
+            lr_end_fraction: None,
+            entropy_coef_end: None,
+            central_critic: false,
+            decision: None,
+        }
+    }
+
+    /// The decision-level MDP with the fixes: per-tick gamma 0.995 (a
+    /// 200-tick, 20-second horizon), GAE lambda 0.95 per tick, 4 x 4
+    /// minibatch passes with a KL stop, value normalisation, annealed
+    /// learning rate and entropy, larger networks.
+    pub fn team() -> PpoConfig {
+        PpoConfig {
+            preset: Preset::Team,
+            gamma: 0.995,
+            gae_lambda: 0.95,
+            clip: 0.2,
+            value_coef: 0.5,
+            entropy_coef: 0.01,
+            lr_actor: 3e-4,
+            lr_critic: 3e-4,
+            epochs: 4,
+            minibatches: 4,
+            rollout: 256,
+            max_grad_norm: Some(0.5),
+            hidden: vec![128, 128],
+            target_kl: Some(0.02),
+            value_norm: true,
+            lr_end_fraction: Some(0.1),
+            entropy_coef_end: Some(0.002),
+            central_critic: false,
+            decision: Some(DecisionConfig {
+                persist: 3,
+                mask_shoot: true,
+            }),
         }
     }
 
@@ -110,7 +205,13 @@ impl PpoConfig {
         match p {
             Preset::Paper => PpoConfig::paper(),
             Preset::Cleanrl => PpoConfig::cleanrl(),
+            Preset::Team => PpoConfig::team(),
         }
+    }
+
+    /// Whether `shoot` is masked out of reach.
+    pub fn masks_shoot(&self) -> bool {
+        self.decision.is_some_and(|d| d.mask_shoot)
     }
 }
 
@@ -121,14 +222,30 @@ pub struct ActorCritic {
     pub vs: nn::VarStore,
     actor: Mlp,
     critic: Mlp,
+    /// Input widths: the layout's length, and the critic's (a multiple of it
+    /// with a centralised critic).
+    pub obs_dim: usize,
+    pub critic_dim: usize,
 }
 
 impl ActorCritic {
-    pub fn new(cfg: &PpoConfig) -> ActorCritic {
+    /// The networks of a run: observations of `scale`'s layout, `learners`
+    /// robots per team (the centralised critic's input).
+    pub fn for_run(cfg: &PpoConfig, scale: &ObsScale, learners: usize) -> ActorCritic {
+        let d = scale.dim();
+        let c = if cfg.central_critic {
+            d * learners.max(1)
+        } else {
+            d
+        };
+        ActorCritic::new(cfg, d, c)
+    }
+
+    pub fn new(cfg: &PpoConfig, obs_dim: usize, critic_dim: usize) -> ActorCritic {
         let vs = nn::VarStore::new(tch::Device::Cpu);
         let (ai, ci) = match cfg.preset {
             Preset::Paper => (InitScheme::Default, InitScheme::Default),
-            Preset::Cleanrl => (
+            Preset::Cleanrl | Preset::Team => (
                 InitScheme::Orthogonal { output_gain: 0.01 },
                 InitScheme::Orthogonal { output_gain: 1.0 },
             ),
@@ -136,7 +253,7 @@ impl ActorCritic {
         let root = vs.root();
         let actor = Mlp::new(
             &(root.set_group(0) / "actor"),
-            OBS_DIM,
+            obs_dim,
             &cfg.hidden,
             ACTIONS,
             Activation::Tanh,
@@ -144,13 +261,24 @@ impl ActorCritic {
         );
         let critic = Mlp::new(
             &(root.set_group(1) / "critic"),
-            OBS_DIM,
+            critic_dim,
             &cfg.hidden,
             1,
             Activation::Tanh,
             ci,
         );
-        ActorCritic { vs, actor, critic }
+        ActorCritic {
+            vs,
+            actor,
+            critic,
+            obs_dim,
+            critic_dim,
+        }
+    }
+
+    /// `n` rows of width `OBS_DIM` as the actor's input (their layout prefix).
+    pub fn actor_input(&self, rows: &[f32], n: usize) -> Tensor {
+        rows_tensor(rows, n, OBS_DIM, self.obs_dim)
     }
 
     /// Action logits, `[n, ACTIONS]`.
@@ -162,6 +290,28 @@ impl ActorCritic {
     pub fn value(&self, obs: &Tensor) -> Tensor {
         self.critic.forward(obs).squeeze_dim(-1)
     }
+}
+
+/// `n` rows of `width` floats as an `[n, dim]` tensor (the first `dim` of each).
+pub fn rows_tensor(rows: &[f32], n: usize, width: usize, dim: usize) -> Tensor {
+    let x = Tensor::from_slice(&rows[..n * width]).view([n as i64, width as i64]);
+    if dim == width {
+        x
+    } else {
+        x.narrow(1, 0, dim as i64).contiguous()
+    }
+}
+
+/// Additive logit masks for `n` rows: 0, or [`MASKED_LOGIT`] on `shoot`
+/// where `shoot_ok` is false.
+pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
+    let mut m = vec![0.0; shoot_ok.len() * ACTIONS];
+    for (i, &ok) in shoot_ok.iter().enumerate() {
+        if !ok {
+            m[i * ACTIONS + SHOOT] = MASKED_LOGIT;
+        }
+    }
+    m
 }
 
 /// The clipped surrogate objective, as a loss to minimise:
@@ -252,6 +402,10 @@ pub struct UpdateStats {
     pub policy_loss: f64,
     pub value_loss: f64,
     pub entropy: f64,
+    /// Mean approximate KL divergence from the rollout's policy (team preset).
+    pub approx_kl: f64,
+    /// Minibatch steps taken (fewer than epochs x minibatches after a KL stop).
+    pub passes: u32,
 }
 
 /// The PPO learner: networks, optimiser and the sampling RNG.
@@ -260,11 +414,19 @@ pub struct Ppo {
     pub net: ActorCritic,
     opt: nn::Optimizer,
     probs: Vec<f32>,
+    /// Running statistics of the value targets (`value_norm`).
+    pub value_norm: RunningNorm,
+    /// The decision-level updates' optimiser (its state is checkpointed,
+    /// so a run resumes bit for bit); `None` for the per-tick presets, which
+    /// keep tch's Adam.
+    pub adam: Option<Adam>,
 }
 
 impl Ppo {
-    pub fn new(cfg: PpoConfig) -> Result<Ppo, LearnError> {
-        let net = ActorCritic::new(&cfg);
+    /// The learner for observations of `scale`'s layout and `learners`
+    /// robots per team.
+    pub fn new(cfg: PpoConfig, scale: &ObsScale, learners: usize) -> Result<Ppo, LearnError> {
+        let net = ActorCritic::for_run(&cfg, scale, learners);
         let eps = if cfg.preset == Preset::Cleanrl {
             1e-5
         } else {
@@ -277,12 +439,173 @@ impl Ppo {
         .build(&net.vs, cfg.lr_actor)?;
         opt.set_lr_group(0, cfg.lr_actor);
         opt.set_lr_group(1, cfg.lr_critic);
+        let adam = cfg.decision.is_some().then(|| {
+            Adam::new(&net.vs, vec![cfg.lr_actor, cfg.lr_critic], 1e-5, |name| {
+                usize::from(!name.starts_with("actor"))
+            })
+        });
         Ok(Ppo {
             cfg,
             net,
             opt,
             probs: Vec::new(),
+            value_norm: RunningNorm::default(),
+            adam,
         })
+    }
+
+    /// Samples one action per row (`n` rows of `OBS_DIM`), `shoot` masked
+    /// where `shoot_ok` is false; writes the actions and their
+    /// log-probabilities under the masked policy.
+    pub fn act_masked(
+        &mut self,
+        obs: &[f32],
+        shoot_ok: &[bool],
+        rng: &mut ChaCha8Rng,
+        actions: &mut [usize],
+        logp: &mut [f32],
+    ) {
+        let n = actions.len();
+        if n == 0 {
+            return;
+        }
+        let x = self.net.actor_input(obs, n);
+        let mask = Tensor::from_slice(&shoot_mask(&shoot_ok[..n])).view([n as i64, ACTIONS as i64]);
+        let p = tch::no_grad(|| (self.net.logits(&x) + mask).softmax(-1, Kind::Float));
+        self.probs.resize(n * ACTIONS, 0.0);
+        p.copy_data(&mut self.probs, n * ACTIONS);
+        for i in 0..n {
+            let row = &self.probs[i * ACTIONS..(i + 1) * ACTIONS];
+            let a = sample(row, rng.random::<f32>());
+            actions[i] = a;
+            logp[i] = row[a].max(1e-12).ln();
+        }
+    }
+
+    /// The critic's values of `n` critic rows (`critic_dim` wide), in
+    /// return units (denormalised under `value_norm`).
+    pub fn critic_values(&self, rows: &[f32], out: &mut [f32]) {
+        let n = out.len();
+        if n == 0 {
+            return;
+        }
+        let w = self.net.critic_dim;
+        let x = Tensor::from_slice(&rows[..n * w]).view([n as i64, w as i64]);
+        tch::no_grad(|| self.net.value(&x)).copy_data(out, n);
+        if self.cfg.value_norm {
+            for v in out.iter_mut() {
+                *v = self.value_norm.denormalise(*v);
+            }
+        }
+    }
+
+    /// One PPO update on decision-level transitions. `progress` in [0, 1]
+    /// is how far the run is (learning-rate and entropy schedules).
+    pub fn update_decisions(
+        &mut self,
+        tr: &Transitions,
+        progress: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> UpdateStats {
+        let n = tr.len();
+        let mut stats = UpdateStats::default();
+        if n == 0 {
+            return stats;
+        }
+        let cfg = self.cfg.clone();
+        let frac = progress.clamp(0.0, 1.0);
+        let Some(mut opt) = self.adam.take() else {
+            return stats;
+        };
+        if let Some(end) = cfg.lr_end_fraction {
+            let scale = 1.0 - (1.0 - end) * frac;
+            opt.set_lr(0, cfg.lr_actor * scale);
+            opt.set_lr(1, cfg.lr_critic * scale);
+        }
+        let ent_coef = match cfg.entropy_coef_end {
+            Some(end) => cfg.entropy_coef + (end - cfg.entropy_coef) * frac,
+            None => cfg.entropy_coef,
+        };
+        let (adv, ret) = tr.gae(cfg.gamma as f32, cfg.gae_lambda as f32);
+        let targets: Vec<f32> = if cfg.value_norm {
+            self.value_norm.update(&ret);
+            ret.iter().map(|&r| self.value_norm.normalise(r)).collect()
+        } else {
+            ret
+        };
+        let obs = self.net.actor_input(&tr.obs, n);
+        let cw = self.net.critic_dim;
+        let cobs = Tensor::from_slice(&tr.critic_obs[..n * cw]).view([n as i64, cw as i64]);
+        let actions = Tensor::from_slice(&tr.actions);
+        let logp_old = Tensor::from_slice(&tr.logp);
+        let mask = Tensor::from_slice(&shoot_mask(&tr.shoot_ok)).view([n as i64, ACTIONS as i64]);
+        let adv = Tensor::from_slice(&adv);
+        let targets = Tensor::from_slice(&targets);
+        let mb = n.div_ceil(cfg.minibatches.max(1));
+        let mut order: Vec<i64> = (0..n as i64).collect();
+        let mut count = 0.0;
+        'passes: for _ in 0..cfg.epochs {
+            shuffle(&mut order, rng);
+            for chunk in order.chunks(mb) {
+                let idx = Tensor::from_slice(chunk);
+                let a = adv.index_select(0, &idx);
+                let a = if chunk.len() > 1 {
+                    (&a - a.mean(Kind::Float)) / (a.std(true) + 1e-8)
+                } else {
+                    a
+                };
+                let logits =
+                    self.net.logits(&obs.index_select(0, &idx)) + mask.index_select(0, &idx);
+                let logp_all = logits.log_softmax(-1, Kind::Float);
+                let logp = logp_all
+                    .gather(1, &actions.index_select(0, &idx).unsqueeze(1), false)
+                    .squeeze_dim(1);
+                let entropy = -(logp_all.exp() * &logp_all)
+                    .sum_dim_intlist(-1, false, Kind::Float)
+                    .mean(Kind::Float);
+                let old = logp_old.index_select(0, &idx);
+                let pl = clipped_surrogate_loss(&logp, &old, &a, cfg.clip);
+                let v = self.net.value(&cobs.index_select(0, &idx));
+                let vl = (&v - targets.index_select(0, &idx))
+                    .square()
+                    .mean(Kind::Float);
+                let loss = &pl + cfg.value_coef * &vl - ent_coef * &entropy;
+                opt.zero_grad();
+                loss.backward();
+                if let Some(m) = cfg.max_grad_norm {
+                    opt.clip_grad_norm(m);
+                }
+                opt.step();
+                let kl = tch::no_grad(|| {
+                    let lr = logp.detach() - &old;
+                    (lr.exp() - 1.0 - &lr).mean(Kind::Float)
+                });
+                let kl = f64::try_from(&kl).unwrap_or(f64::NAN);
+                accumulate(
+                    &mut stats,
+                    UpdateStats {
+                        policy_loss: f64::try_from(&pl).unwrap_or(f64::NAN),
+                        value_loss: f64::try_from(&vl).unwrap_or(f64::NAN),
+                        entropy: f64::try_from(&entropy).unwrap_or(f64::NAN),
+                        approx_kl: kl,
+                        passes: 0,
+                    },
+                    &mut count,
+                );
+                stats.passes += 1;
+                if cfg.target_kl.is_some_and(|t| kl > 1.5 * t) {
+                    break 'passes;
+                }
+            }
+        }
+        self.adam = Some(opt);
+        if count > 0.0 {
+            stats.policy_loss /= count;
+            stats.value_loss /= count;
+            stats.entropy /= count;
+            stats.approx_kl /= count;
+        }
+        stats
     }
 
     /// Samples one action per row of `obs` (`n` rows of `OBS_DIM`) in one
@@ -296,7 +619,7 @@ impl Ppo {
         values: &mut [f32],
     ) {
         let n = actions.len();
-        let x = Tensor::from_slice(obs).view([n as i64, OBS_DIM as i64]);
+        let x = self.net.actor_input(obs, n);
         let (p, v) = tch::no_grad(|| {
             (
                 self.net.logits(&x).softmax(-1, Kind::Float),
@@ -317,7 +640,7 @@ impl Ppo {
     /// Values of `n` observations (the bootstrap for GAE).
     pub fn values(&self, obs: &[f32], out: &mut [f32]) {
         let n = out.len();
-        let x = Tensor::from_slice(obs).view([n as i64, OBS_DIM as i64]);
+        let x = self.net.actor_input(obs, n);
         tch::no_grad(|| self.net.value(&x)).copy_data(out, n);
     }
 
@@ -332,7 +655,7 @@ impl Ppo {
     ) -> UpdateStats {
         let n = ro.actions.len();
         let cfg = self.cfg.clone();
-        let obs = Tensor::from_slice(&ro.obs).view([n as i64, OBS_DIM as i64]);
+        let obs = self.net.actor_input(&ro.obs, n);
         let actions = Tensor::from_slice(&ro.actions);
         let logp_old = Tensor::from_slice(&ro.logp);
         let mut stats = UpdateStats::default();
@@ -347,7 +670,7 @@ impl Ppo {
                     accumulate(&mut stats, s, &mut count);
                 }
             }
-            Preset::Cleanrl => {
+            Preset::Cleanrl | Preset::Team => {
                 let (adv, ret) = gae(
                     &ro.rewards,
                     &ro.values,
@@ -422,6 +745,7 @@ impl Ppo {
             policy_loss: f64::try_from(&pl).unwrap_or(f64::NAN),
             value_loss: f64::try_from(&vl).unwrap_or(f64::NAN),
             entropy: f64::try_from(&entropy).unwrap_or(f64::NAN),
+            ..UpdateStats::default()
         }
     }
 }
@@ -430,7 +754,132 @@ fn accumulate(total: &mut UpdateStats, s: UpdateStats, count: &mut f64) {
     total.policy_loss += s.policy_loss;
     total.value_loss += s.value_loss;
     total.entropy += s.entropy;
+    total.approx_kl += s.approx_kl;
     *count += 1.0;
+}
+
+/// Running mean and variance (Chan et al.'s parallel update), for value
+/// normalisation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RunningNorm {
+    pub mean: f64,
+    pub var: f64,
+    pub count: f64,
+}
+
+impl Default for RunningNorm {
+    fn default() -> RunningNorm {
+        RunningNorm {
+            mean: 0.0,
+            var: 1.0,
+            count: 1e-4,
+        }
+    }
+}
+
+impl RunningNorm {
+    pub fn update(&mut self, xs: &[f32]) {
+        if xs.is_empty() {
+            return;
+        }
+        let n = xs.len() as f64;
+        let mean = xs.iter().map(|&x| f64::from(x)).sum::<f64>() / n;
+        let var = xs
+            .iter()
+            .map(|&x| (f64::from(x) - mean).powi(2))
+            .sum::<f64>()
+            / n;
+        let total = self.count + n;
+        let delta = mean - self.mean;
+        let m2 = self.var * self.count + var * n + delta * delta * self.count * n / total;
+        self.mean += delta * n / total;
+        self.var = m2 / total;
+        self.count = total;
+    }
+
+    fn std(&self) -> f64 {
+        self.var.max(1e-8).sqrt()
+    }
+
+    pub fn normalise(&self, x: f32) -> f32 {
+        ((f64::from(x) - self.mean) / self.std()) as f32
+    }
+
+    pub fn denormalise(&self, y: f32) -> f32 {
+        (f64::from(y) * self.std() + self.mean) as f32
+    }
+}
+
+/// Decision-level transitions: each spans the `dt` ticks from one decision
+/// of a robot to its next (or to the episode's end, or to the rollout's
+/// edge), in the order they closed.
+#[derive(Debug, Default, Clone)]
+pub struct Transitions {
+    /// Actor rows, `OBS_DIM` wide.
+    pub obs: Vec<f32>,
+    /// Critic rows, `critic_dim` wide.
+    pub critic_obs: Vec<f32>,
+    pub actions: Vec<i64>,
+    pub logp: Vec<f32>,
+    pub shoot_ok: Vec<bool>,
+    /// V(s) at the decision, in return units.
+    pub values: Vec<f32>,
+    /// `sum_{i < dt} gamma^i r_i`: the rewards until the next decision.
+    pub rewards: Vec<f32>,
+    /// Ticks until the next decision.
+    pub dt: Vec<u32>,
+    /// The value after `dt` ticks: the next decision's V, the bootstrap V at
+    /// a rollout edge, 0 after the episode's end.
+    pub next_values: Vec<f32>,
+    pub dones: Vec<bool>,
+    /// The transition that follows this one in its robot's stream (the next
+    /// decision, in this rollout).
+    pub next: Vec<Option<usize>>,
+}
+
+impl Transitions {
+    pub fn len(&self) -> usize {
+        self.actions.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.actions.is_empty()
+    }
+
+    pub fn clear(&mut self) {
+        self.obs.clear();
+        self.critic_obs.clear();
+        self.actions.clear();
+        self.logp.clear();
+        self.shoot_ok.clear();
+        self.values.clear();
+        self.rewards.clear();
+        self.dt.clear();
+        self.next_values.clear();
+        self.dones.clear();
+        self.next.clear();
+    }
+
+    /// GAE over time-discounted transitions: `delta = R + gamma^dt V' (1 -
+    /// done) - V`, `A = delta + (gamma lambda)^dt A_next` along each robot's
+    /// chain of decisions. Returns `(advantages, returns = A + V)`.
+    pub fn gae(&self, gamma: f32, lambda: f32) -> (Vec<f32>, Vec<f32>) {
+        let n = self.len();
+        let mut adv = vec![0.0f32; n];
+        for i in (0..n).rev() {
+            let dt = self.dt[i] as i32;
+            let g = gamma.powi(dt);
+            let live = if self.dones[i] { 0.0 } else { 1.0 };
+            let delta = self.rewards[i] + g * self.next_values[i] * live - self.values[i];
+            let tail = match self.next[i] {
+                Some(j) if !self.dones[i] => (gamma * lambda).powi(dt) * adv[j],
+                _ => 0.0,
+            };
+            adv[i] = delta + tail;
+        }
+        let ret = adv.iter().zip(&self.values).map(|(a, v)| a + v).collect();
+        (adv, ret)
+    }
 }
 
 /// Inverse-CDF sampling from a probability row with a uniform `u` in [0, 1).
@@ -457,6 +906,7 @@ fn shuffle(v: &mut [i64], rng: &mut ChaCha8Rng) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::SeedableRng;
 
     fn vals(t: &Tensor) -> Vec<f32> {
         let n = t.numel();
@@ -530,5 +980,91 @@ mod tests {
         assert_eq!(sample(&p, 0.25), 1);
         assert_eq!(sample(&p, 0.59), 2);
         assert_eq!(sample(&p, 0.99), 3);
+    }
+
+    /// Two robots' decisions: stream A decides at ticks 0, 3 (three-tick
+    /// holds) and is cut by the rollout edge at tick 5; stream B decides at
+    /// 0 and its episode ends after 7 ticks.
+    fn two_streams() -> Transitions {
+        Transitions {
+            obs: Vec::new(),
+            critic_obs: Vec::new(),
+            actions: vec![0, 0, 1],
+            logp: vec![0.0; 3],
+            shoot_ok: vec![true; 3],
+            // Closing order: A's first (index 0), A's second (1, at the
+            // edge), B's (2, at the end).
+            values: vec![1.0, 2.0, 0.5],
+            rewards: vec![0.3, 0.2, 1.0],
+            dt: vec![3, 2, 7],
+            next_values: vec![2.0, 4.0, 9.0],
+            dones: vec![false, false, true],
+            next: vec![Some(1), None, None],
+        }
+    }
+
+    #[test]
+    fn decision_gae_discounts_by_elapsed_ticks() {
+        let tr = two_streams();
+        let (g, l) = (0.9f32, 0.5f32);
+        let (adv, ret) = tr.gae(g, l);
+        // A's second: cut at the edge, bootstrapped with V = 4 after 2 ticks.
+        let a1 = 0.2 + g.powi(2) * 4.0 - 2.0;
+        // A's first: its next decision 3 ticks later has V = 2, and its
+        // advantage carries (g l)^3 of the next one's.
+        let a0 = 0.3 + g.powi(3) * 2.0 - 1.0 + (g * l).powi(3) * a1;
+        // B's: the episode ended; nothing is bootstrapped past it.
+        let a2 = 1.0 - 0.5;
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
+        assert!(
+            close(adv[0], a0) && close(adv[1], a1) && close(adv[2], a2),
+            "{adv:?}"
+        );
+        assert!(close(ret[0], a0 + 1.0) && close(ret[2], 1.0));
+        // With one-tick steps, decision GAE is the per-tick GAE.
+        let per_tick = Transitions {
+            dt: vec![1, 1, 1],
+            ..two_streams()
+        };
+        let (adv, _) = per_tick.gae(g, l);
+        let (ref_adv, _) = gae(&[0.3, 0.2], &[1.0, 2.0], &[0.0, 0.0], &[4.0], g, l);
+        assert!(close(adv[0], ref_adv[0]) && close(adv[1], ref_adv[1]));
+    }
+
+    #[test]
+    fn running_norm_tracks_mean_and_variance() {
+        let mut n = RunningNorm::default();
+        n.update(&[1.0, 3.0]);
+        n.update(&[5.0, 7.0, 9.0]);
+        assert!((n.mean - 5.0).abs() < 1e-3, "{n:?}");
+        assert!((n.var - 8.0).abs() < 1e-2, "{n:?}");
+        let y = n.normalise(7.0);
+        assert!((n.denormalise(y) - 7.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_masked_shoot_is_never_sampled_and_has_no_probability() {
+        tch::manual_seed(0);
+        let scale = ObsScale::from_config(&naosoccer_referee::MatchConfig::default());
+        let mut ppo = Ppo::new(PpoConfig::team(), &scale, 4).unwrap();
+        let n = 64;
+        let obs = vec![0.1f32; n * OBS_DIM];
+        let ok: Vec<bool> = (0..n).map(|i| i % 2 == 0).collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let (mut a, mut lp) = (vec![0; n], vec![0.0; n]);
+        let mut shot_when_allowed = 0;
+        for _ in 0..20 {
+            ppo.act_masked(&obs, &ok, &mut rng, &mut a, &mut lp);
+            for i in 0..n {
+                if a[i] == SHOOT {
+                    assert!(ok[i], "row {i} shot with the ball out of reach");
+                    shot_when_allowed += 1;
+                }
+            }
+        }
+        assert!(
+            shot_when_allowed > 0,
+            "an untrained policy shoots when it may"
+        );
     }
 }

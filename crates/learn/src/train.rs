@@ -22,9 +22,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::dqn::{Dqn, DqnConfig, Held, NStep};
 use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
-use crate::obs::{ObsScale, OBS_DIM, OBS_VERSION};
-use crate::policy::{save_stores, ActMode, LearnedPolicy};
-use crate::ppo::{Ppo, PpoConfig, Rollout};
+use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
+use crate::policy::{save_stores, ActMode, Hold, LearnedPolicy};
+use crate::ppo::{Ppo, PpoConfig, Rollout, Transitions};
+use crate::schedule::ScheduleRunner;
 use crate::LearnError;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -55,7 +56,7 @@ impl std::str::FromStr for Algo {
 }
 
 /// Who the learner plays against during training.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum OpponentSpec {
     /// A built-in policy by spec: `scripted`, `scripted:KEY=VAL,...`,
@@ -65,12 +66,23 @@ pub enum OpponentSpec {
     Frozen(String),
     /// The learner's own snapshot, refreshed every `every` transitions.
     SelfPlay { every: u64 },
+    /// A curriculum of opponent mixes with a pool of past snapshots (PPO).
+    Schedule(crate::schedule::Schedule),
 }
 
 impl std::str::FromStr for OpponentSpec {
     type Err = String;
-    /// `scripted` | `random` | `idle` | `ppo:DIR` | `dqn:DIR` | `self-play[:N]`.
+    /// `scripted` | `random` | `idle` | `ppo:DIR` | `dqn:DIR` | `self-play[:N]`
+    /// | `curriculum` | `schedule:STAGES` (see [`crate::schedule`]).
     fn from_str(s: &str) -> Result<Self, String> {
+        if s == "curriculum" {
+            return Ok(OpponentSpec::Schedule(
+                crate::schedule::Schedule::curriculum(),
+            ));
+        }
+        if let Some(rest) = s.strip_prefix("schedule:") {
+            return crate::schedule::Schedule::parse(rest).map(OpponentSpec::Schedule);
+        }
         if let Some(rest) = s.strip_prefix("self-play") {
             let every = match rest.strip_prefix(':') {
                 Some(n) => n
@@ -86,9 +98,9 @@ impl std::str::FromStr for OpponentSpec {
         }
         // Saved as the spec that spells out a scripted variant's parameters,
         // so config.json does not depend on a TOML file staying as it was.
-        let kind = s
-            .parse::<PolicyKind>()
-            .map_err(|e| format!("{e}; or ppo:DIR, dqn:DIR, self-play[:N]"))?;
+        let kind = s.parse::<PolicyKind>().map_err(|e| {
+            format!("{e}; or ppo:DIR, dqn:DIR, self-play[:N], curriculum, schedule:...")
+        })?;
         Ok(OpponentSpec::Builtin(kind.to_string()))
     }
 }
@@ -304,6 +316,33 @@ impl RunDir {
         })
     }
 
+    /// Reopens a run directory to go on from a checkpoint: metrics.csv keeps
+    /// its header and its first `rows` rows (those written up to the
+    /// checkpoint) and grows from there.
+    fn reopen(dir: &Path, rows: u64) -> Result<RunDir, LearnError> {
+        let mpath = dir.join("metrics.csv");
+        let text = std::fs::read_to_string(&mpath).map_err(|e| LearnError::io(&mpath, e))?;
+        let kept: Vec<&str> = text.lines().take(1 + rows as usize).collect();
+        if kept.len() != 1 + rows as usize {
+            return Err(LearnError::Config(format!(
+                "{} has {} rows, the checkpoint expects {rows}",
+                mpath.display(),
+                kept.len().saturating_sub(1)
+            )));
+        }
+        let mut body = kept.join("\n");
+        body.push('\n');
+        std::fs::write(&mpath, body).map_err(|e| LearnError::io(&mpath, e))?;
+        let f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&mpath)
+            .map_err(|e| LearnError::io(&mpath, e))?;
+        Ok(RunDir {
+            dir: dir.to_path_buf(),
+            metrics: std::io::BufWriter::new(f),
+        })
+    }
+
     fn write_row(&mut self, row: &MetricsRow) -> Result<(), LearnError> {
         let p = self.dir.join("metrics.csv");
         writeln!(self.metrics, "{}", row.to_csv()).map_err(|e| LearnError::io(&p, e))?;
@@ -331,32 +370,61 @@ fn opponent_for(cfg: &TrainConfig) -> Result<Opponent, LearnError> {
             Opponent::Net(Box::new(p))
         }
         // The first snapshot is the untrained network, as in self-play from
-        // scratch. It plays as the learner's team would (`ppo:` samples,
-        // `dqn:` is greedy), with draws seeded by the run's seed.
-        OpponentSpec::SelfPlay { .. } => {
-            let mut p = LearnedPolicy::untrained(cfg, "self-play".into());
-            p.set_mode(match cfg.algo {
-                Algo::Ppo => ActMode::Sample,
-                Algo::Dqn => ActMode::Greedy,
-            });
-            p.set_match_seed(cfg.seed);
-            Opponent::Net(Box::new(p))
+        // scratch.
+        OpponentSpec::SelfPlay { .. } => Opponent::Net(Box::new(self_play_snapshot(cfg, None)?)),
+        // The schedule's runner sets the opponents once the learner exists.
+        OpponentSpec::Schedule(_) if cfg.algo == Algo::Ppo => Opponent::Builtin(PolicyKind::Idle),
+        OpponentSpec::Schedule(_) => {
+            return Err(LearnError::Config(
+                "opponent schedules are for PPO runs".into(),
+            ))
         }
     })
 }
 
+/// A self-play opponent: the run's networks (fresh when `weights` is `None`,
+/// else a copy of the live training networks). It plays as the learner's
+/// team would (`ppo:` samples, `dqn:` is greedy), its draws keyed by each
+/// match's seed, and under the decision-level MDP it holds its decisions as
+/// a loaded team does. Every snapshot, the first and each refresh, is built
+/// here (issue 13, cause 1: refreshed snapshots used to play greedily).
+pub fn self_play_snapshot(
+    cfg: &TrainConfig,
+    weights: Option<&[&tch::nn::VarStore]>,
+) -> Result<LearnedPolicy, LearnError> {
+    let mut p = LearnedPolicy::untrained(cfg, "self-play".into());
+    if let Some(w) = weights {
+        p.copy_from(w)?;
+    }
+    p.set_mode(match cfg.algo {
+        Algo::Ppo => ActMode::Sample,
+        Algo::Dqn => ActMode::Greedy,
+    });
+    p.set_match_seed(cfg.seed);
+    Ok(p)
+}
+
 fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
-    if cfg.obs_version != OBS_VERSION {
+    let supported = match cfg.algo {
+        Algo::Ppo => layout_dim(cfg.obs_version).is_some(),
+        Algo::Dqn => cfg.obs_version == OBS_VERSION,
+    };
+    if !supported {
         return Err(LearnError::Config(format!(
-            "observation layout v{} requested, this build has v{OBS_VERSION}",
-            cfg.obs_version
+            "{} cannot train on observation layout v{} (this build: v{OBS_VERSION})",
+            cfg.algo, cfg.obs_version
         )));
+    }
+    if cfg.ppo.decision.is_some() && cfg.obs_version < 2 {
+        return Err(LearnError::Config(
+            "the decision-level MDP needs observation layout v2 (busy flags, kick reach)".into(),
+        ));
     }
     let teammates = cfg
         .teammates
         .parse::<PolicyKind>()
         .map_err(|e| LearnError::Config(e.to_string()))?;
-    VecEnv::new(
+    let mut env = VecEnv::new(
         &cfg.match_config,
         EnvConfig {
             matches: cfg.matches,
@@ -366,7 +434,16 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             seed: cfg.seed,
         },
         opponent_for(cfg)?,
-    )
+    )?;
+    env.set_obs_scale(run_scale(cfg));
+    Ok(env)
+}
+
+/// The observation encoding of a run: its scale under its layout version.
+pub fn run_scale(cfg: &TrainConfig) -> ObsScale {
+    let mut s = cfg.obs_scale;
+    s.version = cfg.obs_version;
+    s
 }
 
 /// Trains as `cfg` says, writing the run directory `out`. `progress` sees
@@ -396,10 +473,14 @@ fn train_ppo(
     out: &Path,
     progress: &mut dyn FnMut(&Progress<'_>),
 ) -> Result<TrainSummary, LearnError> {
+    if cfg.ppo.decision.is_some() {
+        return train_ppo_decisions(cfg, out, None, progress);
+    }
     let mut env = make_env(cfg)?;
     let mut run = RunDir::create(out, cfg)?;
-    let mut ppo = Ppo::new(cfg.ppo.clone())?;
+    let mut ppo = Ppo::new(cfg.ppo.clone(), &run_scale(cfg), cfg.learners.len())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let mut sched = start_schedule(cfg, out, &mut env, &ppo)?;
     let rows = env.rows();
     let robots = cfg.learners.len();
     let mut tally = Tally::new(robots);
@@ -458,9 +539,11 @@ fn train_ppo(
             )?;
         }
         if snapshot_due(cfg, before, transitions) {
-            let mut snap = LearnedPolicy::untrained(cfg, "self-play".into());
-            snap.copy_from(&[&ppo.net.vs])?;
+            let snap = self_play_snapshot(cfg, Some(&[&ppo.net.vs]))?;
             env.set_opponent(Opponent::Net(Box::new(snap)));
+        }
+        if let Some(sc) = sched.as_mut() {
+            sc.advance(cfg, before, transitions, &mut env, &[&ppo.net.vs])?;
         }
     }
     let final_weights = out.join("final.safetensors");
@@ -470,6 +553,452 @@ fn train_ppo(
         transitions,
         final_weights,
     })
+}
+
+/// The opponent schedule's runner, when the run has one.
+fn start_schedule(
+    cfg: &TrainConfig,
+    out: &Path,
+    env: &mut VecEnv,
+    ppo: &Ppo,
+) -> Result<Option<ScheduleRunner>, LearnError> {
+    match &cfg.opponent {
+        OpponentSpec::Schedule(s) => Ok(Some(ScheduleRunner::start(
+            s,
+            cfg,
+            out,
+            env,
+            &[&ppo.net.vs],
+        )?)),
+        _ => Ok(None),
+    }
+}
+
+/// The open transition of one learning robot: from its last decision until
+/// its next (decision-level MDP).
+#[derive(Debug, Clone, Copy, Default)]
+struct Pending {
+    open: bool,
+    action: usize,
+    logp: f32,
+    value: f32,
+    shoot_ok: bool,
+    /// `sum gamma^i r_i` so far, and `gamma^elapsed`.
+    reward: f32,
+    discount: f32,
+    elapsed: u32,
+    /// The closed transition that leads into this one (same robot, same
+    /// episode, same rollout).
+    prev: Option<usize>,
+}
+
+/// The decision-level PPO loop (`team` preset): every tick each learning
+/// robot either decides (free to act, persistence run out: a forward pass,
+/// its open transition closes with the new decision's value) or holds its
+/// action; rewards accumulate into the open transition discounted per tick;
+/// an episode's end closes it with no bootstrap, the rollout's edge with the
+/// critic's value of the edge state.
+fn train_ppo_decisions(
+    cfg: &TrainConfig,
+    out: &Path,
+    resume: Option<ResumeState>,
+    progress: &mut dyn FnMut(&Progress<'_>),
+) -> Result<TrainSummary, LearnError> {
+    let decision = cfg
+        .ppo
+        .decision
+        .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
+    let mut env = make_env(cfg)?;
+    let scale = run_scale(cfg);
+    let l = cfg.learners.len();
+    let mut ppo = Ppo::new(cfg.ppo.clone(), &scale, l)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let mut tally = Tally::new(l);
+    let mut transitions = 0u64;
+    let mut update = 0u64;
+    // The self-play snapshot in play (weights file under pool/).
+    let mut self_play: Option<String> = None;
+    let (mut run, mut sched) = match &resume {
+        None => {
+            let run = RunDir::create(out, cfg)?;
+            let sched = start_schedule(cfg, out, &mut env, &ppo)?;
+            if matches!(cfg.opponent, OpponentSpec::SelfPlay { .. }) {
+                let name = "self-play-step-0.safetensors".to_string();
+                set_self_play(cfg, out, &name, Some(&ppo), &mut env)?;
+                self_play = Some(name);
+            }
+            (run, sched)
+        }
+        Some(st) => {
+            let ck = out.join("checkpoints");
+            ppo.net
+                .vs
+                .load(ck.join(format!("step-{}.safetensors", st.transitions)))?;
+            let named = tch::Tensor::read_safetensors(
+                ck.join(format!("step-{}.adam.safetensors", st.transitions)),
+            )?;
+            if let Some(a) = ppo.adam.as_mut() {
+                a.load_state(&named)?;
+            }
+            ppo.value_norm = st.value_norm;
+            rng = st.rng()?;
+            transitions = st.transitions;
+            update = st.update;
+            tally.total_episodes = st.total_episodes;
+            env.restart_at(&st.episodes, st.env_ticks)?;
+            let sched = match (&cfg.opponent, &st.schedule) {
+                (OpponentSpec::Schedule(s), Some(state)) => {
+                    Some(ScheduleRunner::resume(s, cfg, out, &mut env, state)?)
+                }
+                _ => None,
+            };
+            if let Some(name) = &st.self_play {
+                set_self_play(cfg, out, name, None, &mut env)?;
+                self_play = Some(name.clone());
+            }
+            (RunDir::reopen(out, st.update)?, sched)
+        }
+    };
+    let rows = env.rows();
+    let gamma = cfg.ppo.gamma as f32;
+    let cw = ppo.net.critic_dim;
+    let mut tr = Transitions::default();
+    let mut holds = vec![Hold::default(); rows];
+    let mut pend = vec![Pending::default(); rows];
+    let mut pend_obs = vec![0.0f32; rows * OBS_DIM];
+    let mut pend_cobs = vec![0.0f32; rows * cw];
+    let mut actions = vec![0usize; rows];
+    // Scratch for the deciding rows of a tick.
+    let (mut dec_rows, mut dec_obs, mut dec_cobs, mut dec_ok) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
+    let mut out_rows = Vec::new();
+    let mut last_checkpoint = transitions;
+    while transitions < cfg.steps {
+        tr.clear();
+        let mut ticks = 0usize;
+        // A rollout also ends with the episodes (all matches have one
+        // length and end together): checkpoints fall on episode
+        // boundaries, where a resumed run can rebuild the matches exactly.
+        let mut boundary = false;
+        while ticks < cfg.ppo.rollout && !boundary {
+            ticks += 1;
+            dec_rows.clear();
+            dec_obs.clear();
+            dec_cobs.clear();
+            dec_ok.clear();
+            for (r, hold) in holds.iter_mut().enumerate() {
+                let o = env.learner_observation(r);
+                if hold.must_decide(o) {
+                    dec_rows.push(r);
+                    dec_obs.extend_from_slice(&env.observations()[r * OBS_DIM..(r + 1) * OBS_DIM]);
+                    push_critic_row(env.observations(), l, r, scale.dim(), cw, &mut dec_cobs);
+                    dec_ok.push(!cfg.ppo.masks_shoot() || scale.kick.in_reach(o));
+                } else {
+                    actions[r] = hold.held(o);
+                }
+            }
+            let k = dec_rows.len();
+            dec_act.resize(k, 0);
+            dec_logp.resize(k, 0.0);
+            dec_val.resize(k, 0.0);
+            ppo.act_masked(&dec_obs, &dec_ok, &mut rng, &mut dec_act, &mut dec_logp);
+            ppo.critic_values(&dec_cobs, &mut dec_val);
+            for (j, &r) in dec_rows.iter().enumerate() {
+                let prev = close_pending(
+                    &mut tr,
+                    &mut pend[r],
+                    &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
+                    &pend_cobs[r * cw..(r + 1) * cw],
+                    dec_val[j],
+                    false,
+                );
+                pend[r] = Pending {
+                    open: true,
+                    action: dec_act[j],
+                    logp: dec_logp[j],
+                    value: dec_val[j],
+                    shoot_ok: dec_ok[j],
+                    reward: 0.0,
+                    discount: 1.0,
+                    elapsed: 0,
+                    prev,
+                };
+                pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM]
+                    .copy_from_slice(&dec_obs[j * OBS_DIM..(j + 1) * OBS_DIM]);
+                pend_cobs[r * cw..(r + 1) * cw].copy_from_slice(&dec_cobs[j * cw..(j + 1) * cw]);
+                let tick = env.learner_observation(r).tick;
+                holds[r].start(dec_act[j], tick, decision.persist);
+                actions[r] = dec_act[j];
+            }
+            let finished = env.step(&actions)?;
+            for (r, p) in pend.iter_mut().enumerate() {
+                if p.open {
+                    p.reward += p.discount * env.rewards()[r];
+                    p.discount *= gamma;
+                    p.elapsed += 1;
+                }
+                if env.dones()[r] {
+                    close_pending(
+                        &mut tr,
+                        p,
+                        &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
+                        &pend_cobs[r * cw..(r + 1) * cw],
+                        0.0,
+                        true,
+                    );
+                    holds[r].reset();
+                }
+            }
+            tally.add_rewards(env.rewards());
+            tally.episodes.extend(finished);
+            boundary = env.dones().iter().all(|&d| d);
+        }
+        // The rollout's edge: open transitions end here, bootstrapped with
+        // the critic's value of the state they reached.
+        let mut edge_cobs = Vec::with_capacity(rows * cw);
+        for r in 0..rows {
+            push_critic_row(env.observations(), l, r, scale.dim(), cw, &mut edge_cobs);
+        }
+        let mut edge_val = vec![0.0f32; rows];
+        ppo.critic_values(&edge_cobs, &mut edge_val);
+        for r in 0..rows {
+            close_pending(
+                &mut tr,
+                &mut pend[r],
+                &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
+                &pend_cobs[r * cw..(r + 1) * cw],
+                edge_val[r],
+                false,
+            );
+            pend[r].prev = None;
+        }
+        let before = transitions;
+        transitions += (ticks * rows) as u64;
+        let stats = ppo.update_decisions(&tr, before as f64 / cfg.steps.max(1) as f64, &mut rng);
+        update += 1;
+        let row = tally.row(
+            update,
+            env.ticks() / cfg.matches as u64,
+            transitions,
+            (stats.policy_loss, stats.value_loss, stats.entropy),
+        );
+        run.write_row(&row)?;
+        progress(&Progress {
+            row: &row,
+            total_steps: cfg.steps,
+        });
+        out_rows.push(row);
+        if snapshot_due(cfg, before, transitions) {
+            let name = format!("self-play-step-{transitions}.safetensors");
+            set_self_play(cfg, out, &name, Some(&ppo), &mut env)?;
+            self_play = Some(name);
+        }
+        if let Some(sc) = sched.as_mut() {
+            sc.advance(cfg, before, transitions, &mut env, &[&ppo.net.vs])?;
+        }
+        if boundary && checkpoint_due(last_checkpoint, transitions, cfg.checkpoint_every) {
+            last_checkpoint = transitions;
+            let state = ResumeState {
+                transitions,
+                update,
+                env_ticks: env.ticks(),
+                episodes: env.episodes(),
+                total_episodes: tally.total_episodes,
+                rng_seed: rng.get_seed(),
+                rng_stream: rng.get_stream(),
+                rng_word_pos: rng.get_word_pos().to_string(),
+                value_norm: ppo.value_norm,
+                schedule: sched.as_ref().map(ScheduleRunner::state),
+                self_play: self_play.clone(),
+            };
+            write_checkpoint(out, &ppo, &state)?;
+        }
+    }
+    let final_weights = out.join("final.safetensors");
+    save_stores(&[&ppo.net.vs], &final_weights)?;
+    Ok(TrainSummary {
+        rows: out_rows,
+        transitions,
+        final_weights,
+    })
+}
+
+/// Where a decision-level run stands at a checkpoint (an episode boundary):
+/// with the weights (`step-N.safetensors`) and the optimiser's moments
+/// (`step-N.adam.safetensors`), everything `train --resume` needs to go on
+/// as if the run had not stopped. Saved as `checkpoints/step-N.resume.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ResumeState {
+    pub transitions: u64,
+    pub update: u64,
+    pub env_ticks: u64,
+    /// Each match's next episode number.
+    pub episodes: Vec<u64>,
+    pub total_episodes: u64,
+    /// The ChaCha8 stream (sampling, minibatch order): seed, stream and
+    /// word position (a decimal string: it is a u128).
+    pub rng_seed: [u8; 32],
+    pub rng_stream: u64,
+    pub rng_word_pos: String,
+    pub value_norm: crate::ppo::RunningNorm,
+    /// The opponent schedule's stage and snapshot pool.
+    pub schedule: Option<(usize, Vec<(u64, String)>)>,
+    /// The self-play snapshot in play (a file in `pool/`).
+    pub self_play: Option<String>,
+}
+
+impl ResumeState {
+    fn rng(&self) -> Result<ChaCha8Rng, LearnError> {
+        let mut r = ChaCha8Rng::from_seed(self.rng_seed);
+        r.set_stream(self.rng_stream);
+        r.set_word_pos(self.rng_word_pos.parse::<u128>().map_err(|_| {
+            LearnError::Config(format!("bad RNG position {:?}", self.rng_word_pos))
+        })?);
+        Ok(r)
+    }
+}
+
+fn write_checkpoint(out: &Path, ppo: &Ppo, state: &ResumeState) -> Result<(), LearnError> {
+    let ck = out.join("checkpoints");
+    let n = state.transitions;
+    save_stores(&[&ppo.net.vs], &ck.join(format!("step-{n}.safetensors")))?;
+    if let Some(a) = &ppo.adam {
+        tch::Tensor::write_safetensors(&a.state(), ck.join(format!("step-{n}.adam.safetensors")))?;
+    }
+    let path = ck.join(format!("step-{n}.resume.json"));
+    let json = serde_json::to_string_pretty(state).map_err(|e| LearnError::Json {
+        path: path.clone(),
+        source: e,
+    })?;
+    // Written last: a checkpoint counts once its resume state exists.
+    std::fs::write(&path, json).map_err(|e| LearnError::io(&path, e))
+}
+
+/// Makes `pool/NAME` the self-play opponent, writing the live weights
+/// there first when `live` is given.
+fn set_self_play(
+    cfg: &TrainConfig,
+    out: &Path,
+    name: &str,
+    live: Option<&Ppo>,
+    env: &mut VecEnv,
+) -> Result<(), LearnError> {
+    let dir = out.join("pool");
+    std::fs::create_dir_all(&dir).map_err(|e| LearnError::io(&dir, e))?;
+    let path = dir.join(name);
+    if let Some(p) = live {
+        save_stores(&[&p.net.vs], &path)?;
+    }
+    let mut snap = self_play_snapshot(cfg, None)?;
+    snap.load_weights(&path)?;
+    env.set_opponent(Opponent::Net(Box::new(snap)));
+    Ok(())
+}
+
+/// Continues the run in `dir` from its latest resumable checkpoint, as if
+/// it had not stopped (decision-level PPO runs; `steps`, if given, replaces
+/// the run's length). metrics.csv keeps the rows up to that checkpoint.
+pub fn resume(
+    dir: &Path,
+    steps: Option<u64>,
+    progress: &mut dyn FnMut(&Progress<'_>),
+) -> Result<TrainSummary, LearnError> {
+    let cfg_path = dir.join("config.json");
+    let text = std::fs::read_to_string(&cfg_path).map_err(|e| LearnError::io(&cfg_path, e))?;
+    let mut cfg: TrainConfig = serde_json::from_str(&text).map_err(|e| LearnError::Json {
+        path: cfg_path.clone(),
+        source: e,
+    })?;
+    if cfg.algo != Algo::Ppo || cfg.ppo.decision.is_none() {
+        return Err(LearnError::Config(
+            "--resume continues decision-level PPO runs (--preset team) only".into(),
+        ));
+    }
+    if let Some(s) = steps {
+        cfg.steps = s;
+        let json = serde_json::to_string_pretty(&cfg).map_err(|e| LearnError::Json {
+            path: cfg_path.clone(),
+            source: e,
+        })?;
+        std::fs::write(&cfg_path, json).map_err(|e| LearnError::io(&cfg_path, e))?;
+    }
+    let ck = dir.join("checkpoints");
+    let mut best: Option<u64> = None;
+    if let Ok(rd) = std::fs::read_dir(&ck) {
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if let Some(n) = name
+                .strip_prefix("step-")
+                .and_then(|n| n.strip_suffix(".resume.json"))
+                .and_then(|n| n.parse::<u64>().ok())
+            {
+                best = best.max(Some(n));
+            }
+        }
+    }
+    let n = best.ok_or_else(|| LearnError::Spec {
+        spec: dir.display().to_string(),
+        reason: "no checkpoints/step-N.resume.json to resume from".into(),
+    })?;
+    let path = ck.join(format!("step-{n}.resume.json"));
+    let text = std::fs::read_to_string(&path).map_err(|e| LearnError::io(&path, e))?;
+    let state: ResumeState = serde_json::from_str(&text).map_err(|e| LearnError::Json {
+        path: path.clone(),
+        source: e,
+    })?;
+    tch::manual_seed(cfg.seed as i64);
+    train_ppo_decisions(&cfg, dir, Some(state), progress)
+}
+
+/// Closes `p` (if open) into `tr` with the value `next_value` after it;
+/// returns the closed transition's index when the robot's stream goes on
+/// from it (not at an episode's end).
+fn close_pending(
+    tr: &mut Transitions,
+    p: &mut Pending,
+    obs: &[f32],
+    cobs: &[f32],
+    next_value: f32,
+    done: bool,
+) -> Option<usize> {
+    if !p.open {
+        return None;
+    }
+    let i = tr.len();
+    tr.obs.extend_from_slice(obs);
+    tr.critic_obs.extend_from_slice(cobs);
+    tr.actions.push(p.action as i64);
+    tr.logp.push(p.logp);
+    tr.shoot_ok.push(p.shoot_ok);
+    tr.values.push(p.value);
+    tr.rewards.push(p.reward);
+    tr.dt.push(p.elapsed.max(1));
+    tr.next_values.push(next_value);
+    tr.dones.push(done);
+    tr.next.push(None);
+    if let Some(j) = p.prev {
+        tr.next[j] = Some(i);
+    }
+    p.open = false;
+    p.prev = None;
+    (!done).then_some(i)
+}
+
+/// Appends row `r`'s critic input: its own observation vector (the layout's
+/// `dim` entries), then, with a centralised critic (`cw` > `dim`), those of
+/// the other learning robots of its match in order.
+fn push_critic_row(feats: &[f32], l: usize, r: usize, dim: usize, cw: usize, out: &mut Vec<f32>) {
+    let row = |i: usize| &feats[i * OBS_DIM..i * OBS_DIM + dim];
+    out.extend_from_slice(row(r));
+    if cw > dim {
+        let base = r / l * l;
+        for k in 0..l {
+            if base + k != r {
+                out.extend_from_slice(row(base + k));
+            }
+        }
+    }
 }
 
 fn train_dqn(
@@ -562,8 +1091,7 @@ fn train_dqn(
             )?;
         }
         if snapshot_due(cfg, before, transitions) {
-            let mut snap = LearnedPolicy::untrained(cfg, "self-play".into());
-            snap.copy_from(&stores)?;
+            let snap = self_play_snapshot(cfg, Some(&stores))?;
             env.set_opponent(Opponent::Net(Box::new(snap)));
         }
     }

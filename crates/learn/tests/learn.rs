@@ -357,3 +357,233 @@ fn dqn_team_preset_learns_the_tiny_task_and_beats_random() {
         "DQN team {learned:.3} does not beat random {random:.3}"
     );
 }
+
+/// Issue 13, cause 1: every self-play snapshot, not only the first, plays
+/// as the learner's team plays: a PPO snapshot samples (a greedy PPO team
+/// hardly ever shoots, so greedy snapshots made a toothless opponent), a
+/// DQN snapshot is greedy; and it carries the live weights.
+#[test]
+fn issue_13_refreshed_self_play_snapshots_sample_like_the_learner() {
+    use naosoccer_learn::ppo::Ppo;
+    use naosoccer_learn::train::{run_scale, self_play_snapshot};
+    use naosoccer_learn::ActMode;
+
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    tch::manual_seed(13);
+    let mut cfg = tiny_config(Algo::Ppo, 13);
+    cfg.ppo = naosoccer_learn::ppo::PpoConfig::team();
+    cfg.opponent = OpponentSpec::SelfPlay { every: 256 };
+    let live = Ppo::new(cfg.ppo.clone(), &run_scale(&cfg), cfg.learners.len()).unwrap();
+    let first = self_play_snapshot(&cfg, None).unwrap();
+    let refreshed = self_play_snapshot(&cfg, Some(&[&live.net.vs])).unwrap();
+    assert_eq!(first.mode(), ActMode::Sample);
+    assert_eq!(
+        refreshed.mode(),
+        ActMode::Sample,
+        "a refreshed PPO snapshot samples"
+    );
+    assert_eq!(
+        refreshed.decision(),
+        cfg.ppo.decision,
+        "and holds its decisions"
+    );
+    let rows = probe_rows();
+    let x = tch::Tensor::from_slice(&rows).view([16, OBS_DIM as i64]);
+    let mut want = vec![0.0f32; 16 * 5];
+    live.net.logits(&x).copy_data(&mut want, 16 * 5);
+    assert_eq!(refreshed.outputs(&rows, 0), want, "the live weights");
+
+    let dqn = tiny_config(Algo::Dqn, 13);
+    assert_eq!(
+        self_play_snapshot(&dqn, None).unwrap().mode(),
+        ActMode::Greedy
+    );
+}
+
+/// The decision-level MDP's per-robot state: a free robot decides, holds a
+/// movement for `persist` ticks and a shoot for one (the kick then keeps it
+/// busy), does not decide while lying or kicking, and starts afresh when
+/// the ticks go back (a new match).
+#[test]
+fn a_hold_decides_when_free_and_persistence_ran_out() {
+    use naosoccer_learn::policy::Hold;
+    use naosoccer_learn::ppo::{SHOOT, STAY};
+    use naosoccer_proto::Team;
+    use naosoccer_referee::Match;
+
+    let m = Match::new(&MatchConfig::default(), 1).unwrap();
+    let at = |tick: u64, busy: bool, fallen: bool| {
+        let mut o = m.observe(Team::Blue, 1);
+        o.tick = tick;
+        o.own[1].busy = busy;
+        o.own[1].fallen = fallen;
+        o
+    };
+    let mut h = Hold::default();
+    assert!(h.must_decide(&at(0, false, false)));
+    h.start(0, 0, 3);
+    for t in 1..3 {
+        assert!(!h.must_decide(&at(t, false, false)), "tick {t} holds");
+        assert_eq!(h.held(&at(t, false, false)), 0);
+    }
+    assert!(!h.must_decide(&at(3, true, false)), "busy: no decision");
+    assert_eq!(h.held(&at(3, true, false)), STAY);
+    assert!(!h.must_decide(&at(4, false, true)), "lying: no decision");
+    assert!(
+        h.must_decide(&at(5, false, false)),
+        "free again, persistence over"
+    );
+    h.start(SHOOT, 5, 3);
+    assert!(
+        h.must_decide(&at(6, false, false)),
+        "a shoot holds one tick"
+    );
+    h.start(0, 6, 3);
+    assert!(h.must_decide(&at(0, false, false)), "a new match");
+}
+
+/// A `team`-preset policy plays the same whether each robot has its own
+/// policy (robot connections), one answers for the team (`act_batch`) or
+/// many matches are batched (`act_matches`, evaluation and self-play): the
+/// decision state lives in the policy, keyed by match seed, team, player
+/// and tick. It never shoots with the ball out of reach, and a free robot
+/// changes its action only when its persistence ran out.
+#[test]
+fn team_policies_decide_alike_however_they_are_asked() {
+    use naosoccer_client::Policy;
+    use naosoccer_learn::ppo::{PpoConfig, SHOOT};
+    use naosoccer_learn::ActMode;
+    use naosoccer_proto::{Action, Team};
+    use naosoccer_referee::Match;
+
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    tch::manual_seed(7);
+    let mut cfg = tiny_config(Algo::Ppo, 7);
+    cfg.ppo = PpoConfig::team();
+    let persist = cfg.ppo.decision.unwrap().persist as u64;
+    let dir = out_dir("team_policy_weights");
+    std::fs::create_dir_all(&dir).unwrap();
+    let weights = dir.join("w.safetensors");
+    LearnedPolicy::untrained(&cfg, "w".into())
+        .save(&weights)
+        .unwrap();
+    let loaded = || {
+        let mut p = LearnedPolicy::untrained(&cfg, "team".into());
+        p.load_weights(&weights).unwrap();
+        p.set_mode(ActMode::Sample);
+        p.set_match_seed(31);
+        p
+    };
+    let mut m = Match::new(&cfg.match_config, 31).unwrap();
+    let mut single: Vec<LearnedPolicy> = (0..4).map(|_| loaded()).collect();
+    let mut team = loaded();
+    let mut batched = loaded();
+    let reach = batched.scale().kick;
+    let mut last: [Option<(Action, u64)>; 4] = [None; 4];
+    let mut changes = 0;
+    for _ in 0..120 {
+        let obs: Vec<_> = (0..4).map(|p| m.observe(Team::Blue, p)).collect();
+        let a: Vec<Action> = single.iter_mut().zip(&obs).map(|(p, o)| p.act(o)).collect();
+        let mut b = [Action::Stay; 4];
+        team.act_batch(&obs, &mut b);
+        let mut c = [0usize; 8];
+        // Another match batched alongside must not disturb this one.
+        let other: Vec<_> = (0..4).map(|p| m.observe(Team::Red, p)).collect();
+        batched.act_matches(&[(99, &other), (31, &obs)], &mut c);
+        let c: Vec<Action> = c[4..]
+            .iter()
+            .map(|&i| Action::from_index(i).unwrap())
+            .collect();
+        assert_eq!(a, b.to_vec(), "robot policies vs one team policy");
+        assert_eq!(a, c, "robot policies vs batched matches");
+        for (p, o) in obs.iter().enumerate() {
+            if a[p].index() == SHOOT {
+                assert!(reach.in_reach(o), "shot out of reach at tick {}", o.tick);
+            }
+            let me = o.me();
+            if me.busy || me.fallen {
+                last[p] = None;
+                continue;
+            }
+            if let Some((prev, since)) = last[p] {
+                if prev != a[p] {
+                    changes += 1;
+                    assert!(
+                        o.tick - since >= persist,
+                        "player {p} changed its action after {} ticks",
+                        o.tick - since
+                    );
+                    last[p] = Some((a[p], o.tick));
+                }
+            } else {
+                last[p] = Some((a[p], o.tick));
+            }
+        }
+        let mut all = [Action::Stay; 8];
+        all[..4].copy_from_slice(&a);
+        m.step(&all);
+    }
+    assert!(
+        changes > 10,
+        "an untrained team changes its mind ({changes})"
+    );
+}
+
+/// `train --resume`: a run killed after a checkpoint and resumed writes the
+/// same metrics.csv and the same final weights as one that never stopped
+/// (decision-level preset, an opponent schedule with a snapshot pool, so
+/// the optimiser's moments, the RNG stream, the value normalisation, the
+/// matches, the schedule's stage and the pool all have to come back).
+#[test]
+fn a_resumed_run_writes_what_an_uninterrupted_one_does() {
+    use naosoccer_learn::ppo::PpoConfig;
+    use naosoccer_learn::schedule::Schedule;
+
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let mut cfg = tiny_config(Algo::Ppo, 41);
+    cfg.ppo = PpoConfig::team();
+    cfg.ppo.rollout = 32;
+    cfg.matches = 4;
+    cfg.learners = vec![0, 1, 2, 3];
+    // 60-tick episodes of 16 robots: 960 transitions each, six of them.
+    cfg.steps = 6 * 960;
+    cfg.checkpoint_every = 1000;
+    let mut sched = Schedule::parse("idle@2000,random+pool").unwrap();
+    sched.pool_every = 1500;
+    cfg.opponent = OpponentSpec::Schedule(sched);
+
+    let whole = out_dir("resume_whole");
+    tch::manual_seed(cfg.seed as i64);
+    train(&cfg, &whole, &mut |_| {}).unwrap();
+
+    let split = out_dir("resume_split");
+    // Killed while writing its 8th row (the 6th closed the third episode
+    // and checkpointed).
+    let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train(&cfg, &split, &mut |p| {
+            if p.row.update == 8 {
+                panic!("killed");
+            }
+        })
+        .unwrap();
+    }));
+    assert!(killed.is_err());
+    let partial = std::fs::read_to_string(split.join("metrics.csv")).unwrap();
+    assert_eq!(
+        partial.lines().count(),
+        1 + 8,
+        "the killed run wrote 8 rows"
+    );
+    naosoccer_learn::train::resume(&split, None, &mut |_| {}).unwrap();
+
+    let a = std::fs::read_to_string(whole.join("metrics.csv")).unwrap();
+    let b = std::fs::read_to_string(split.join("metrics.csv")).unwrap();
+    assert_eq!(a, b, "resumed metrics differ");
+    assert!(a.lines().count() >= 12, "{a}");
+    let wa = std::fs::read(whole.join("final.safetensors")).unwrap();
+    let wb = std::fs::read(split.join("final.safetensors")).unwrap();
+    assert!(wa == wb, "resumed final weights differ");
+}

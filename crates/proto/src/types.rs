@@ -8,7 +8,7 @@ pub const PLAYERS_PER_TEAM: usize = 4;
 /// Robots on the pitch.
 pub const ROBOTS: usize = 2 * PLAYERS_PER_TEAM;
 
-/// A team. Blue kicks off first and, in world coordinates, attacks +x.
+/// A team. In world coordinates blue attacks +x (its own goal is at -x).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Team {
@@ -331,8 +331,9 @@ pub enum Event {
         tick: u64,
         robot: RobotId,
     },
-    /// The ball left the field; it was put back at (x, y). `last_touch` is the
-    /// team whose robot touched it last, if known.
+    /// The ball left the field; it was put back at (x, y) for the set play
+    /// that follows (a `SetPlay` event names it). `last_touch` is the team
+    /// whose robot touched it last, if known.
     BallOut {
         tick: u64,
         x: f32,
@@ -353,7 +354,7 @@ pub enum Event {
     /// (kick-offs have their own event). Protocol 1.2.
     SetPlay {
         tick: u64,
-        kind: SetPlayKind,
+        play: SetPlayKind,
         team: Team,
         x: f32,
         y: f32,

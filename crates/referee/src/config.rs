@@ -50,7 +50,9 @@ pub struct RulesConfig {
     pub fall_height: f32,
     /// ... or whose torso tilts further than this from upright (radians).
     pub fall_tilt: f32,
-    /// An out ball is put back this far inside the nearest line (metres).
+    /// A set play's ball goes this far inside the line(s) it is placed on
+    /// (metres): a kick-in's ball on the touch line, a corner kick's in the
+    /// corner.
     pub ball_inset: f32,
     /// A robot is out when its torso is further than this outside a line (metres).
     pub robot_out_margin: f32,
@@ -59,6 +61,31 @@ pub struct RulesConfig {
     /// Where each player stands when the other team kicks off; also where a
     /// robot that left the field is reset to.
     pub kickoff_defend: [Placement; PLAYERS_PER_TEAM],
+    /// Halves a match is split into, 1 or 2. With 2 the team that did not
+    /// kick off the first half kicks off the second (SPL).
+    pub halves: u32,
+    /// Who kicks off the first half: `coin` (a coin toss seeded by the match
+    /// seed), `blue` or `red`.
+    pub first_kickoff: FirstKickOff,
+    /// While a set play lasts, robots of the team that does not take it keep
+    /// at least this far from the ball (metres; SPL: 0.75 m on its 9 m pitch).
+    pub set_play_distance: f32,
+    /// A set play ends when the ball has moved, or after this many seconds.
+    pub set_play_seconds: f32,
+    /// The goal area in front of each goal (metres): a goal kick's ball is
+    /// placed on its front corner on the side where the ball left.
+    pub goal_area_depth: f32,
+    pub goal_area_width: f32,
+}
+
+/// Who kicks off the first half.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FirstKickOff {
+    /// A coin toss seeded by the match seed.
+    Coin,
+    Blue,
+    Red,
 }
 
 impl Default for RulesConfig {
@@ -69,7 +96,7 @@ impl Default for RulesConfig {
             standup_seconds: 5.0,
             fall_height: 0.2,
             fall_tilt: 0.5,
-            ball_inset: 0.2,
+            ball_inset: 0.05,
             robot_out_margin: 0.3,
             kickoff_attack: [
                 [-2.6, 0.0, 0.0],
@@ -83,6 +110,12 @@ impl Default for RulesConfig {
                 [-1.5, 1.2, 0.0],
                 [-1.8, -1.0, 0.0],
             ],
+            halves: 2,
+            first_kickoff: FirstKickOff::Coin,
+            set_play_distance: 0.6,
+            set_play_seconds: 15.0,
+            goal_area_depth: 0.6,
+            goal_area_width: 3.4,
         }
     }
 }
@@ -103,12 +136,28 @@ pub struct RewardConfig {
     pub control: f32,
     /// Subtracted from every robot of a team whose opponent controls the ball.
     pub opponent_control: f32,
-    /// Ours, not the paper's: per metre the ball moved toward the opponent
-    /// goal this tick (negative when it moved toward the own goal), for every
-    /// robot of the team. A potential-based shaping term (the potential is
-    /// the ball's x in the team's frame), so it does not change which
-    /// policies are optimal; 0 (off) by default.
+    /// Ours, not the paper's: potential-based shaping by the ball's progress,
+    /// per metre, for every robot of the team. The potential is the ball's x
+    /// in the team's frame (metres toward the opponent goal) and the term is
+    /// `progress * (shaping_gamma * x' - x)` between two observed states, so
+    /// restarts count too (a ball kicked out over the opponent's goal line
+    /// and put back for their goal kick is charged the move back). It is
+    /// added outside the log compression; 0 (off) by default.
     pub progress: f32,
+    /// Ours: potential-based shaping by each robot's own distance to the
+    /// ball, per metre (potential `-distance`), added to that robot's reward
+    /// outside the log compression; 0 (off) by default.
+    pub approach: f32,
+    /// The discount of the shaping terms (set it to the learner's per-tick
+    /// gamma, which keeps them policy-invariant, Ng et al. 1999); 1 by default.
+    pub shaping_gamma: f32,
+    /// Ours: added (outside the log) to the passer and the receiver of a pass
+    /// that carried the ball at least `pass_min_distance` metres and ended
+    /// nearer the opponent goal than it started; 0 (off) by default. Short
+    /// and backward passes earn nothing, so the bonus cannot be farmed by
+    /// tapping the ball between neighbours.
+    pub pass: f32,
+    pub pass_min_distance: f32,
 }
 
 impl Default for RewardConfig {
@@ -120,6 +169,10 @@ impl Default for RewardConfig {
             control: 0.5,
             opponent_control: 0.2,
             progress: 0.0,
+            approach: 0.0,
+            shaping_gamma: 1.0,
+            pass: 0.0,
+            pass_min_distance: 1.0,
         }
     }
 }
@@ -214,6 +267,32 @@ impl MatchConfig {
         positive("rules.fall_height", r.fall_height)?;
         positive("rules.fall_tilt", r.fall_tilt)?;
         non_negative("rules.ball_inset", r.ball_inset)?;
+        if r.halves == 0 || r.halves > 2 {
+            return Err(ConfigError::Invalid {
+                field: "rules.halves",
+                reason: format!("must be 1 or 2, got {}", r.halves),
+            });
+        }
+        non_negative("rules.set_play_distance", r.set_play_distance)?;
+        non_negative("rules.set_play_seconds", r.set_play_seconds)?;
+        positive("rules.goal_area_depth", r.goal_area_depth)?;
+        positive("rules.goal_area_width", r.goal_area_width)?;
+        let (hl, hw) = (self.sim.field_length / 2.0, self.sim.field_width / 2.0);
+        if r.ball_inset >= hw.min(hl) {
+            return Err(ConfigError::Invalid {
+                field: "rules.ball_inset",
+                reason: format!("must be less than half the field, got {}", r.ball_inset),
+            });
+        }
+        if r.goal_area_depth >= hl || r.goal_area_width / 2.0 > hw {
+            return Err(ConfigError::Invalid {
+                field: "rules.goal_area_depth",
+                reason: format!(
+                    "the goal area ({} x {} m) must fit in its half of the field",
+                    r.goal_area_depth, r.goal_area_width
+                ),
+            });
+        }
         non_negative("rules.robot_out_margin", r.robot_out_margin)?;
         for (field, places) in [
             ("rules.kickoff_attack", &r.kickoff_attack),
@@ -233,10 +312,19 @@ impl MatchConfig {
             ("reward.control", w.control),
             ("reward.opponent_control", w.opponent_control),
             ("reward.progress", w.progress),
+            ("reward.approach", w.approach),
+            ("reward.pass", w.pass),
+            ("reward.pass_min_distance", w.pass_min_distance),
         ] {
             non_negative(field, v)?;
         }
         positive("reward.close_scale", w.close_scale)?;
+        if !(w.shaping_gamma.is_finite() && w.shaping_gamma > 0.0 && w.shaping_gamma <= 1.0) {
+            return Err(ConfigError::Invalid {
+                field: "reward.shaping_gamma",
+                reason: format!("must be in (0, 1], got {}", w.shaping_gamma),
+            });
+        }
         Ok(())
     }
 }

@@ -2,15 +2,16 @@
 //! run the rules, apply their commands, keep score and statistics.
 
 use naosoccer_proto::{
-    Action, Event, MatchStats, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS,
+    Action, Event, MatchStats, Observation, RobotId, SetPlayKind, SetPlayObs, Team,
+    PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_sim::{Command as SimCommand, RobotModel, Sim, SimError};
 
-use crate::config::{ConfigError, MatchConfig};
+use crate::config::{ConfigError, MatchConfig, RewardConfig};
 use crate::observe::{self, ObsContext};
 use crate::rules::{
-    Clock, Command, FallRule, Field, GoalRule, KickOff, OutOfBoundsRule, Outcome, PassRule,
-    PossessionRule,
+    Clock, Command, FallRule, Field, GoalRule, KickOff, OutOfBoundsRule, Outcome, PassMade,
+    PassRule, PossessionRule, SetPlayRule,
 };
 
 /// Why a match could not be set up.
@@ -37,6 +38,7 @@ pub struct Match {
     fall: FallRule,
     possession: PossessionRule,
     pass: PassRule,
+    set_play: SetPlayRule,
     /// Control ticks played.
     tick: u64,
     finished: bool,
@@ -48,9 +50,9 @@ pub struct Match {
     stats: MatchStats,
     /// The team that scored during the last tick (for the reward).
     last_goal: Option<Team>,
-    /// How far the ball moved along +x (blue's attacking direction) during
-    /// the last tick's physics steps, before any restart placed it.
-    ball_dx: f32,
+    /// The shaping terms of the last tick's reward, by robot index: the
+    /// potential-based terms and the pass bonus (see `RewardConfig`).
+    shaping: [f32; ROBOTS],
     outcome: Outcome,
 }
 
@@ -70,13 +72,23 @@ impl Match {
             sim,
             field,
             steps_per_tick,
-            clock: Clock::new(cfg.minutes, cfg.control_hz),
-            kickoff: KickOff::new(r),
+            clock: Clock::new(cfg.minutes, cfg.control_hz, r.halves),
+            kickoff: KickOff::new(r, KickOff::first_team(r.first_kickoff, seed)),
             goal: GoalRule::new(field),
-            out_of_bounds: OutOfBoundsRule::new(field, r.ball_inset, r.robot_out_margin),
+            out_of_bounds: OutOfBoundsRule::new(
+                field,
+                r.ball_inset,
+                r.robot_out_margin,
+                r.goal_area_depth,
+                r.goal_area_width,
+            ),
             fall: FallRule::new(r.fall_height, r.fall_tilt, standup_ticks),
             possession: PossessionRule::new(r.b_d, r.b_rad),
             pass: PassRule::new(),
+            set_play: SetPlayRule::new(
+                r.set_play_distance,
+                (f64::from(r.set_play_seconds) * f64::from(cfg.control_hz)).round() as u64,
+            ),
             tick: 0,
             finished: false,
             announce_start: true,
@@ -84,12 +96,31 @@ impl Match {
             score: [0; 2],
             stats: MatchStats::default(),
             last_goal: None,
-            ball_dx: 0.0,
+            shaping: [0.0; ROBOTS],
             outcome: Outcome::default(),
             cfg: cfg.clone(),
         };
-        m.place_for_kickoff(KickOff::FIRST);
+        m.place_for_kickoff(m.kickoff.first(), 0);
         Ok(m)
+    }
+
+    /// The team that kicks off the first half (the configuration's
+    /// `first_kickoff`: a named team or the seeded coin toss).
+    pub fn first_kickoff(&self) -> Team {
+        self.kickoff.first()
+    }
+
+    /// The half being played at the current tick: 1 or 2.
+    pub fn half(&self) -> u8 {
+        self.clock.half(self.tick)
+    }
+
+    /// The set play in progress: its kind, the team taking it and the
+    /// control ticks left before the other team may approach anyway.
+    pub fn set_play(&self) -> Option<(SetPlayKind, Team, u32)> {
+        self.set_play
+            .active()
+            .map(|a| (a.kind, a.team, self.set_play.ticks_left(self.tick)))
     }
 
     /// Plays one control tick with these actions (robot index order: blue
@@ -116,41 +147,87 @@ impl Match {
         if std::mem::take(&mut self.announce_start) {
             self.outcome.events.push(Event::KickOff {
                 tick,
-                team: KickOff::FIRST,
+                team: self.kickoff.first(),
             });
         }
+        // A step of `forward` covers about walk_speed / control_hz: the
+        // keep-out margin, so a robot on the edge cannot step inside.
+        let step_margin = self.cfg.sim.walk_speed * 1.2 / self.cfg.control_hz;
         for (i, &a) in actions.iter().enumerate() {
+            let snap = &self.sim.snapshot().robots[i];
             let cmd = if self.fall.is_down(i) {
+                SimCommand::Stay
+            } else if a == Action::Forward
+                && RobotId::from_index(i).is_some_and(|robot| {
+                    self.set_play.blocks_forward(
+                        robot,
+                        snap.pos[0],
+                        snap.pos[1],
+                        snap.heading,
+                        step_margin,
+                    )
+                })
+            {
+                // Set play: the other team keeps its distance.
                 SimCommand::Stay
             } else {
                 sim_command(a)
             };
             self.sim.set_command(i, cmd);
         }
-        let ball_x = self.sim.snapshot().ball.pos[0];
+        let potential_before = self.potentials();
         for _ in 0..self.steps_per_tick {
             self.sim.step();
             after_physics(&self.sim);
             // Kicks are reported per physics step; gather the tick's.
-            for k in &self.sim.snapshot().kicks {
+            let snap = self.sim.snapshot();
+            let ball = [snap.ball.pos[0], snap.ball.pos[1]];
+            for k in &snap.kicks {
                 if let Some(robot) = RobotId::from_index(k.robot) {
                     self.outcome.events.push(Event::Kick {
                         tick,
                         robot,
                         speed: k.speed,
                     });
-                    self.pass.kick(robot);
+                    self.pass.kick(robot, ball);
                 }
             }
         }
-        self.ball_dx = self.sim.snapshot().ball.pos[0] - ball_x;
+        self.shaping = [0.0; ROBOTS];
         self.run_rules(tick);
+        self.apply_commands(tick);
         for e in &self.outcome.events {
             apply_stats(&mut self.stats, e);
         }
-        self.apply_commands(tick);
         self.tick += 1;
+        // Shaping between the observed states before and after the tick,
+        // restarts included, so it telescopes over a match.
+        let potential_after = self.potentials();
+        let gamma = self.cfg.reward.shaping_gamma;
+        for ((s, before), after) in self
+            .shaping
+            .iter_mut()
+            .zip(potential_before)
+            .zip(potential_after)
+        {
+            *s += gamma * after - before;
+        }
         &self.outcome.events
+    }
+
+    /// Each robot's shaping potential in the current state: `progress`
+    /// times the ball's x in its team's frame minus `approach` times its
+    /// distance to the ball.
+    fn potentials(&self) -> [f32; ROBOTS] {
+        let w = &self.cfg.reward;
+        let snap = self.sim.snapshot();
+        let [bx, by, _] = snap.ball.pos;
+        std::array::from_fn(|i| {
+            let r = &snap.robots[i];
+            let sx = if i < PLAYERS_PER_TEAM { 1.0 } else { -1.0 };
+            let d = (bx - r.pos[0]).hypot(by - r.pos[1]);
+            w.progress * sx * bx - w.approach * d
+        })
     }
 
     fn run_rules(&mut self, tick: u64) {
@@ -161,24 +238,39 @@ impl Match {
             self.score[team.index()] += 1;
             self.last_goal = Some(team);
         }
-        let ball_replaced = scored.is_some() || self.out_of_bounds.check_ball(snap, tick, out);
+        let ball_replaced =
+            scored.is_some() || self.out_of_bounds.check_ball(snap, tick, out).is_some();
         if scored.is_none() {
             // After a goal every robot goes to its kick-off place anyway.
-            let down = self.fall.down();
             self.out_of_bounds
-                .check_robots(snap, &down, &self.kickoff, tick, out);
+                .check_robots(snap, &self.kickoff, tick, out);
         }
         self.fall.check(snap, tick, out);
+        if !ball_replaced {
+            self.set_play.check(snap, tick);
+        }
         if ball_replaced {
             // The ball is taken out of play: nobody controls it and no pass spans the restart.
             self.controller = None;
             self.pass.reset();
         } else {
             self.controller = self.possession.controller(snap, &self.fall.down());
-            self.pass.control(self.controller, tick, out);
+            let ball = [snap.ball.pos[0], snap.ball.pos[1]];
+            if let Some(p) = self.pass.control(self.controller, ball, tick, out) {
+                pass_bonus(&self.cfg.reward, &mut self.shaping, p);
+            }
         }
         if let Some(c) = self.controller {
             self.stats.team_mut(c.team()).control_ticks += 1;
+        }
+        if self
+            .clock
+            .check_half_time(tick, self.kickoff.second(), &mut Outcome::default())
+        {
+            // The half-time kick-off replaces any restart this tick asked for.
+            out.commands
+                .retain(|c| !matches!(c, Command::KickOff { .. } | Command::SetPlay { .. }));
+            self.clock.check_half_time(tick, self.kickoff.second(), out);
         }
         self.finished = self.clock.check(tick, out);
     }
@@ -186,7 +278,16 @@ impl Match {
     fn apply_commands(&mut self, tick: u64) {
         for i in 0..self.outcome.commands.len() {
             match self.outcome.commands[i] {
-                Command::PlaceBall { x, y } => self.sim.place_ball(x, y),
+                Command::SetPlay { kind, team, x, y } => {
+                    self.sim.place_ball(x, y);
+                    let b = self.sim.snapshot().ball.pos;
+                    let spot = (b[0], b[1]);
+                    self.set_play.award(kind, team, spot, tick + 1);
+                    SetPlayRule::event(tick, kind, team, spot, &mut self.outcome);
+                    self.push_out_of_the_circle();
+                    self.pass.reset();
+                    self.controller = None;
+                }
                 Command::ResetRobot {
                     robot,
                     x,
@@ -200,7 +301,9 @@ impl Match {
                         self.outcome.events.push(Event::GetUp { tick, robot });
                     }
                 }
-                Command::StandUp { robot } => self.sim.stand_up(robot.index()),
+                Command::StandUp { robot } => {
+                    self.sim.stand_up(robot.index());
+                }
                 Command::KickOff { team } => {
                     // Robots lying at a kick-off are stood up in their places.
                     for robot in RobotId::all() {
@@ -208,22 +311,41 @@ impl Match {
                             self.outcome.events.push(Event::GetUp { tick, robot });
                         }
                     }
-                    self.place_for_kickoff(team);
+                    self.place_for_kickoff(team, tick + 1);
                     self.outcome.events.push(Event::KickOff { tick, team });
                 }
             }
         }
     }
 
-    fn place_for_kickoff(&mut self, team: Team) {
-        self.sim.place_ball(0.0, 0.0);
+    /// Robots of the team not taking the set play that stand inside the
+    /// keep-out circle go straight out to its edge (lying ones stay: they
+    /// cannot act, and get up where they lie).
+    fn push_out_of_the_circle(&mut self) {
         for robot in RobotId::all() {
-            let [x, y, h] = self.kickoff.place(robot, team);
-            self.sim.place_robot(robot.index(), x, y, h);
+            let i = robot.index();
+            if self.fall.is_down(i) {
+                continue;
+            }
+            let r = self.sim.snapshot().robots[i];
+            if let Some((x, y)) = self.set_play.push_out(robot.team(), r.pos[0], r.pos[1]) {
+                self.sim.place_robot(i, x, y, r.heading);
+            }
         }
+    }
+
+    fn place_for_kickoff(&mut self, team: Team, first_tick: u64) {
+        let mut spots = [(0.0, 0.0, 0.0); ROBOTS];
+        for (spot, robot) in spots.iter_mut().zip(RobotId::all()) {
+            let [x, y, h] = self.kickoff.place(robot, team);
+            *spot = (x, y, h);
+        }
+        self.sim.place_all((0.0, 0.0), &spots);
         self.fall.clear();
         self.pass.reset();
         self.controller = None;
+        self.set_play
+            .award(SetPlayKind::KickOff, team, (0.0, 0.0), first_tick);
     }
 
     /// What `player` of `team` sees now, in its team's frame (attacking +x).
@@ -236,12 +358,19 @@ impl Match {
     /// `observe` into a reused observation (no allocation).
     pub fn observe_into(&self, team: Team, player: usize, out: &mut Observation) {
         let down = self.fall.down();
+        let set_play = self.set_play.active().map(|a| SetPlayObs {
+            kind: a.kind,
+            own: a.team == team,
+            ticks_left: self.set_play.ticks_left(self.tick),
+        });
         let ctx = ObsContext {
             tick: self.tick,
             time_left: self.clock.time_left(self.tick),
             score: self.score,
             down: &down,
             controller: self.controller,
+            half: self.clock.half(self.tick),
+            set_play,
         };
         observe::fill(self.sim.snapshot(), &ctx, team, player, out);
         out.reward = self.reward(team, player);
@@ -302,6 +431,8 @@ impl Match {
             h.write(self.fall.up_at(i).unwrap_or(u64::MAX));
         }
         h.write(self.pass.fingerprint());
+        h.write(self.set_play.fingerprint());
+        h.write(self.kickoff.first().index() as u64);
         h.finish()
     }
 
@@ -344,9 +475,11 @@ impl Match {
     }
 
     /// Per-robot reward of the last tick for `team` (learn's MDP):
-    /// `s = r_goal + r_close + r_control + r_progress`, returned as `sign(s) * ln(1 + |s|)`
-    /// (DESIGN.md explains why not the paper's `-log(s)`). All 0 before the
-    /// first tick.
+    /// `s = r_goal + r_close + r_control - r_opponent_control`, returned as
+    /// `sign(s) * ln(1 + |s|)` (DESIGN.md explains why not the paper's
+    /// `-log(s)`), plus the shaping terms outside the log: potential-based
+    /// progress and approach, and the pass bonus (`RewardConfig`). All 0
+    /// before the first tick.
     pub fn rewards(&self, team: Team) -> [f32; PLAYERS_PER_TEAM] {
         let shared = self.shared_reward(team);
         std::array::from_fn(|p| self.player_reward(team, p, shared))
@@ -357,8 +490,8 @@ impl Match {
         self.player_reward(team, player, self.shared_reward(team))
     }
 
-    /// The terms every robot of `team` shares: goal, opponent control, progress.
-    fn shared_reward(&self, team: Team) -> [f32; 3] {
+    /// The terms every robot of `team` shares: goal, opponent control.
+    fn shared_reward(&self, team: Team) -> [f32; 2] {
         let w = &self.cfg.reward;
         let goal = match self.last_goal {
             Some(t) if t == team => w.goal,
@@ -369,14 +502,10 @@ impl Match {
             Some(c) if c.team() != team => -w.opponent_control,
             _ => 0.0,
         };
-        let toward = match team {
-            Team::Blue => self.ball_dx,
-            Team::Red => -self.ball_dx,
-        };
-        [goal, opponent, w.progress * toward]
+        [goal, opponent]
     }
 
-    fn player_reward(&self, team: Team, player: usize, shared: [f32; 3]) -> f32 {
+    fn player_reward(&self, team: Team, player: usize, shared: [f32; 2]) -> f32 {
         let Some(robot) = RobotId::new(team, player) else {
             return 0.0;
         };
@@ -393,10 +522,23 @@ impl Match {
         } else {
             0.0
         };
-        let [goal, opponent, progress] = shared;
+        let [goal, opponent] = shared;
         // The order of the sum is part of the reward's bits (and of every
         // training run's): keep it.
-        log_compress(goal + close + control + opponent + progress)
+        log_compress(goal + close + control + opponent) + self.shaping[robot.index()]
+    }
+}
+
+/// The pass bonus of `RewardConfig::pass`, for a long enough forward pass.
+fn pass_bonus(w: &RewardConfig, shaping: &mut [f32; ROBOTS], p: PassMade) {
+    if w.pass <= 0.0 {
+        return;
+    }
+    let long = (p.end[0] - p.start[0]).hypot(p.end[1] - p.start[1]) >= w.pass_min_distance;
+    let forward = (p.end[0] - p.start[0]) * p.from.team().direction() > 0.0;
+    if long && forward {
+        shaping[p.from.index()] += w.pass;
+        shaping[p.to.index()] += w.pass;
     }
 }
 
@@ -428,6 +570,17 @@ fn apply_stats(stats: &mut MatchStats, e: &Event) {
             ..
         } => stats.team_mut(team).out_of_bounds += 1,
         Event::RobotOut { robot, .. } => stats.team_mut(robot.team()).out_of_bounds += 1,
+        Event::SetPlay {
+            play: kind, team, ..
+        } => {
+            let t = stats.team_mut(team);
+            match kind {
+                SetPlayKind::KickIn => t.kick_ins += 1,
+                SetPlayKind::GoalKick => t.goal_kicks += 1,
+                SetPlayKind::CornerKick => t.corner_kicks += 1,
+                SetPlayKind::KickOff => {}
+            }
+        }
         _ => {}
     }
 }

@@ -39,7 +39,7 @@ mod observe;
 pub mod rules;
 mod sim_glue;
 
-pub use config::{ConfigError, MatchConfig, Placement, RewardConfig, RulesConfig};
+pub use config::{ConfigError, FirstKickOff, MatchConfig, Placement, RewardConfig, RulesConfig};
 pub use game::{log_compress, Match, MatchError};
 pub use observe::blank_observation;
 pub use rules::{Command, Field};

@@ -4,7 +4,7 @@
 use std::f32::consts::PI;
 
 use naosoccer_proto::{
-    BallObs, Observation, RobotId, RobotObs, ScoreObs, Team, PLAYERS_PER_TEAM, ROBOTS,
+    BallObs, Observation, RobotId, RobotObs, ScoreObs, SetPlayObs, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_sim::Snapshot;
 
@@ -18,6 +18,9 @@ pub(crate) struct ObsContext<'a> {
     pub score: [u32; 2],
     pub down: &'a [bool; ROBOTS],
     pub controller: Option<RobotId>,
+    pub half: u8,
+    /// The set play in progress, from the observing team's side.
+    pub set_play: Option<SetPlayObs>,
 }
 
 /// Fills `out` for `player` of `team`. Writes every field, so a reused
@@ -38,7 +41,7 @@ pub(crate) fn fill(
         RobotObs {
             x: sx * r.pos[0],
             y: sx * r.pos[1],
-            heading: wrap_angle(r.heading + rot),
+            heading: wire_angle(r.heading + rot),
             fallen: ctx.down[i],
             busy: r.kicking && !ctx.down[i],
         }
@@ -65,6 +68,22 @@ pub(crate) fn fill(
         vy: sx * snap.ball.vel[1],
     };
     out.opponent_control = ctx.controller.is_some_and(|c| c.team() != team);
+    out.half = ctx.half;
+    out.set_play = ctx.set_play;
+}
+
+/// An angle for the wire, in (-pi, pi] as a reader sees it: `f32`'s nearest
+/// value to pi (3.1415927) is above pi when read as a double, so headings at
+/// the half-turn go out as the largest `f32` below pi instead.
+pub(crate) fn wire_angle(a: f32) -> f32 {
+    const BELOW_PI: f32 = 3.141_592_5;
+    let a = wrap_angle(a);
+    let pi = std::f64::consts::PI;
+    if f64::from(a) > pi || f64::from(a) <= -pi {
+        BELOW_PI
+    } else {
+        a
+    }
 }
 
 /// An observation with every field zero, to be filled by `observe_into`.
@@ -83,5 +102,34 @@ pub fn blank_observation() -> Observation {
         reward: 0.0,
         half: 1,
         set_play: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 15: red's mirrored heading of a robot facing 0 went out as
+    /// 3.1415927, above pi when read as a double.
+    #[test]
+    fn issue_15_wire_headings_stay_in_the_half_open_interval() {
+        let pi = std::f64::consts::PI;
+        for a in [
+            0.0f32,
+            PI,
+            -PI,
+            PI + 1e-7,
+            -PI - 1e-7,
+            3.0 * PI,
+            2.0 * PI,
+            1.0,
+            -3.1415925,
+            f32::from_bits(PI.to_bits() - 1),
+        ] {
+            let w = f64::from(wire_angle(a));
+            assert!(w > -pi && w <= pi, "{a} -> {w}");
+        }
+        assert_eq!(wire_angle(0.0 + PI), 3.141_592_5);
+        assert_eq!(wire_angle(1.0), 1.0);
     }
 }

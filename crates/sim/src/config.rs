@@ -118,7 +118,11 @@ pub struct SimConfig {
     /// Torso-to-torso distance, metres, within which another robot blocks.
     pub stumble_distance: f32,
     /// Torque that throws a stumbling robot over, N m, applied until it is
-    /// tilted twice `fall_tilt` (at most a second).
+    /// tilted twice `fall_tilt` (at most a second), and only while it tips
+    /// slower than 2 rad/s: it starts the fall, gravity finishes it. The
+    /// robot's controller is off from the stumble on; it has fallen once
+    /// its tilt passes `fall_tilt`, and if whatever it leans on holds it
+    /// short of that, its controller takes over again after the second.
     pub stumble_torque: f32,
     /// Friction coefficient of robot bodies (not soles: walking is driven by
     /// the bounded leg force, so soles slide freely).

@@ -26,10 +26,13 @@
 //!     pub fn set_command(&mut self, robot: usize, cmd: Command);// held until changed
 //!     pub fn step(&mut self);                                   // one physics step
 //!     pub fn snapshot(&self) -> &Snapshot;                      // refreshed by every step / placement
-//!     pub fn place_ball(&mut self, x: f32, y: f32);             // at rest on the ground
+//!     // Placements go to the nearest spot clear of every body and return it:
+//!     pub fn place_ball(&mut self, x: f32, y: f32) -> (f32, f32);  // at rest on the ground
 //!     pub fn set_ball_velocity(&mut self, vx: f32, vy: f32);
-//!     pub fn place_robot(&mut self, robot: usize, x: f32, y: f32, heading: f32); // upright, at rest
-//!     pub fn stand_up(&mut self, robot: usize);                 // upright where it lies, same heading
+//!     pub fn place_robot(&mut self, robot: usize, x: f32, y: f32, heading: f32) -> (f32, f32); // upright, at rest
+//!     pub fn stand_up(&mut self, robot: usize) -> (f32, f32);    // upright where it lies, same heading
+//!     pub fn place_all(&mut self, ball: (f32, f32), robots: &[(f32, f32, f32); 8])
+//!         -> ((f32, f32), [(f32, f32); 8]);                     // a kick-off: ball, then robots in order
 //!     pub fn push_robot(&mut self, robot: usize, impulse: [f32; 3]); // at torso height
 //!     pub fn state_hash(&self) -> u64;                          // raw bits of every body's pose+velocity, sim RNG state
 //!     // also: config() -> &SimConfig, seed() -> u64, steps() -> u64, counts() -> (bodies, colliders),
@@ -37,7 +40,8 @@
 //! }
 //! pub struct Snapshot { pub step: u64, pub ball: BallState, pub robots: [RobotState; 8], pub kicks: Vec<Kick> /* this step */ }
 //! pub struct BallState { pub pos: [f32; 3], pub vel: [f32; 3] }
-//! pub struct RobotState { pub pos: [f32; 3] /* torso */, pub heading: f32, pub tilt: f32, pub vel: [f32; 3],
+//! pub struct RobotState { pub pos: [f32; 3] /* torso */, pub heading: f32, pub tilt: f32,
+//!                         pub rotation: [f32; 4] /* quaternion x, y, z, w */, pub vel: [f32; 3],
 //!                         pub fallen: bool /* balance lost, lying */, pub kicking: bool, pub last_ball_touch_step: Option<u64>,
 //!                         pub command: Command }
 //! pub struct Kick { pub robot: usize, pub speed: f32 }      // a kick that moved the ball
@@ -47,6 +51,7 @@
 
 mod config;
 mod model;
+mod place;
 mod sim;
 mod world;
 
@@ -109,10 +114,15 @@ pub struct RobotState {
     pub heading: f32,
     /// Angle between the torso's up axis and the vertical, radians.
     pub tilt: f32,
+    /// The torso's full orientation, a unit quaternion `[x, y, z, w]`
+    /// (world from body): which way a fallen robot lies.
+    pub rotation: [f32; 4],
     /// Torso linear velocity, m/s.
     pub vel: [f32; 3],
-    /// Balance lost (tilt went past `fall_tilt`): lying, controller off,
-    /// until `stand_up` or `place_robot`.
+    /// Balance lost: the torso tilted past `fall_tilt`. Set in the step in
+    /// which the tilt passes it (a stumbling robot, whose controller has
+    /// already let go, is not fallen until then), and held, the robot lying
+    /// passive with its controller off, until `stand_up` or `place_robot`.
     pub fallen: bool,
     /// In a kick (wind-up or recovery).
     pub kicking: bool,

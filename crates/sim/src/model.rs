@@ -50,6 +50,9 @@ pub enum Primitive {
     Sphere { radius: f32 },
     /// A cylinder along local z.
     Cylinder { radius: f32, half_length: f32 },
+    /// A capsule along local z: a cylinder of `half_length` with a
+    /// hemisphere of `radius` on each end (URDF `length` is the cylinder's).
+    Capsule { radius: f32, half_length: f32 },
 }
 
 /// A revolute (or other movable) joint of the model, with its limits.
@@ -234,9 +237,13 @@ impl RobotModel {
                         radius: *radius as f32,
                         half_length: *length as f32 * 0.5,
                     },
+                    urdf_rs::Geometry::Capsule { radius, length } => Primitive::Capsule {
+                        radius: *radius as f32,
+                        half_length: *length as f32 * 0.5,
+                    },
                     other => {
                         return Err(SimError::Urdf(format!(
-                            "link `{}`: only box, sphere and cylinder collisions are supported, got {other:?}",
+                            "link `{}`: only box, sphere, cylinder and capsule collisions are supported, got {other:?}",
                             link.name
                         )))
                     }
@@ -351,6 +358,10 @@ fn support(p: &Primitive, pose: &Pose, d: Vec3) -> f32 {
                 radius,
                 half_length,
             } => local.z.abs() * half_length + radius * (1.0 - local.z * local.z).max(0.0).sqrt(),
+            Primitive::Capsule {
+                radius,
+                half_length,
+            } => local.z.abs() * half_length + radius,
         }
 }
 

@@ -20,6 +20,33 @@ pub(crate) struct Built {
     pub ball: RigidBodyHandle,
     pub ball_collider: ColliderHandle,
     pub robots: [RigidBodyHandle; ROBOTS],
+    /// The goals' colliders (posts, bars, nets): fixed obstacles to placement.
+    pub goal_colliders: Vec<ColliderHandle>,
+    /// Each robot's sole colliders, as (robot, collider).
+    pub soles: Vec<(usize, ColliderHandle)>,
+}
+
+/// Standing soles slide without friction (the drive force walks the robot);
+/// a lying robot's soles rub the ground like the rest of its body, or a
+/// robot that fell with some momentum would slide and spin on its heels for
+/// ever.
+pub(crate) fn set_sole_friction(
+    world: &mut PhysicsWorld,
+    cfg: &SimConfig,
+    soles: &[(usize, ColliderHandle)],
+    robot: usize,
+    lying: bool,
+) {
+    for &(_, c) in soles.iter().filter(|(i, _)| *i == robot) {
+        let co = &mut world.colliders[c];
+        if lying {
+            co.set_friction(cfg.robot_friction);
+            co.set_friction_combine_rule(CoefficientCombineRule::Average);
+        } else {
+            co.set_friction(0.0);
+            co.set_friction_combine_rule(CoefficientCombineRule::Min);
+        }
+    }
 }
 
 /// Robots line up on their own half, facing the centre, until the referee
@@ -76,10 +103,11 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
     let mouth = cfg.goal_width * 0.5;
     let h = cfg.goal_height;
     let line = cfg.field_length * 0.5;
+    let mut goal_colliders = Vec::with_capacity(14);
     for s in [-1.0f32, 1.0] {
         let goal = world.insert_body(RigidBodyBuilder::fixed());
         let mut add = |c: ColliderBuilder| {
-            world.insert_collider(c.friction(0.3), Some(goal));
+            goal_colliders.push(world.insert_collider(c.friction(0.3), Some(goal)));
         };
         for side in [-1.0f32, 1.0] {
             add(fixed(
@@ -128,7 +156,11 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
             // turns 60 rad/s, more than a radian a step: rapier's contact
             // point, fixed to the ball, then leaves the ground within a step
             // and the ball hops and brakes. Spin plays no part in NAO soccer.
-            .lock_rotations(),
+            .lock_rotations()
+            // Rapier sweeps fast bodies against fixed colliders (goals,
+            // ground) by itself; full CCD also sweeps the ball against the
+            // robots, whose shins are thinner than a kick's travel in a step.
+            .ccd_enabled(true),
     );
     let ball_collider = world.insert_collider(
         ColliderBuilder::ball(cfg.ball_radius)
@@ -140,6 +172,7 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
     );
 
     let mut robots = [RigidBodyHandle::invalid(); ROBOTS];
+    let mut soles = Vec::new();
     for (i, handle) in robots.iter_mut().enumerate() {
         let (x, y, heading) = default_robot_spot(cfg, i);
         *handle = world.insert_body(
@@ -160,6 +193,10 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
                     radius,
                     half_length,
                 } => ColliderBuilder::cylinder(half_length, radius),
+                Primitive::Capsule {
+                    radius,
+                    half_length,
+                } => ColliderBuilder::capsule_z(half_length, radius),
             };
             let pose = match shape.primitive {
                 Primitive::Cylinder { .. } => {
@@ -175,7 +212,9 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
                 .density(0.0)
                 .user_data(ROBOT_TAG | i as u128);
             // Soles slide freely: the legs' bounded drive force stands in for
-            // the ground reaction of walking (see `Sim::step`).
+            // the ground reaction of walking (see `Sim::step`). A fallen
+            // robot's soles get the friction of the rest of its body back
+            // (`set_sole_friction`).
             let builder = if sole {
                 builder
                     .friction(0.0)
@@ -183,7 +222,10 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
             } else {
                 builder.friction(cfg.robot_friction)
             };
-            world.insert_collider(builder, Some(*handle));
+            let c = world.insert_collider(builder, Some(*handle));
+            if sole {
+                soles.push((i, c));
+            }
         }
     }
 
@@ -199,6 +241,8 @@ pub(crate) fn build(cfg: &SimConfig, model: &RobotModel) -> Result<Built, SimErr
         ball,
         ball_collider,
         robots,
+        goal_colliders,
+        soles,
     })
 }
 

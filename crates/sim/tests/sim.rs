@@ -13,11 +13,11 @@ fn lab(seed: u64) -> Sim {
 fn lab_with(cfg: &SimConfig, seed: u64) -> Sim {
     let model = RobotModel::builtin().expect("builtin model");
     let mut sim = Sim::new(cfg, &model, seed).expect("sim");
+    sim.place_ball(2.5, 2.0);
     for i in 0..ROBOTS {
         sim.place_robot(i, -2.5 + 0.7 * i as f32, -2.0, 0.0);
     }
-    sim.place_robot(0, 0.0, 0.0, 0.0);
-    sim.place_ball(2.5, 2.0);
+    assert_eq!(sim.place_robot(0, 0.0, 0.0, 0.0), (0.0, 0.0));
     sim
 }
 
@@ -103,7 +103,8 @@ mod model {
         );
         let err = RobotModel::from_urdf_str(&text).unwrap_err();
         assert!(
-            err.to_string().contains("only box, sphere and cylinder"),
+            err.to_string()
+                .contains("only box, sphere, cylinder and capsule"),
             "{err}"
         );
     }
@@ -194,7 +195,7 @@ mod kick {
 
     fn kick_with_ball_at(x: f32, y: f32) -> (Sim, f32, usize) {
         let mut sim = lab(5);
-        sim.place_ball(x, y);
+        assert_eq!(sim.place_ball(x, y), (x, y));
         sim.set_command(0, Command::Shoot);
         let mut kicks = 0;
         let mut kicking_seen = false;
@@ -562,5 +563,33 @@ fn every_robot_is_controlled_independently() {
     assert!(angle_diff(s.robots[5].heading, std::f32::consts::FRAC_PI_2) > 0.7);
     for i in [0, 1, 3, 4, 6, 7] {
         assert!((s.robots[i].pos[1] + 1.0).abs() < 0.02, "robot {i} moved");
+    }
+}
+
+/// Issue 12: the audit's findings about the pitch's physics, one test each.
+mod issue_12 {
+    use super::*;
+
+    /// Balls sent head-on (and off-centre) at a standing robot's legs, over
+    /// speeds up to a hard kick and beyond: every one must bounce back or
+    /// glance off; none may come out behind the legs on its line (audit:
+    /// 23 of 286 fast balls went through a shin).
+    #[test]
+    fn issue_12_a_fast_ball_does_not_pass_through_a_standing_robot() {
+        let mut through = Vec::new();
+        for speed in [1.5f32, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0, 6.0] {
+            for k in -8..=8 {
+                let y = k as f32 * 0.01;
+                let mut sim = lab(3);
+                sim.place_ball(0.5, y);
+                sim.set_ball_velocity(-speed, 0.0);
+                run(&mut sim, 1.0);
+                let b = sim.snapshot().ball;
+                if b.pos[0] < -0.3 && (b.pos[1] - y).abs() < 0.1 {
+                    through.push((speed, y, b.pos));
+                }
+            }
+        }
+        assert!(through.is_empty(), "passed through: {through:?}");
     }
 }

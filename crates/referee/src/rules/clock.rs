@@ -1,28 +1,62 @@
-//! The match clock. Game time is a count of control ticks; wall-clock time
-//! never enters.
+//! The match clock and its halves. Game time is a count of control ticks;
+//! wall-clock time never enters. With two halves the first is the first
+//! `total / 2` ticks; when its last tick has been played the referee calls
+//! half time and the second half starts with a kick-off by the team that did
+//! not kick off the first.
 
-use naosoccer_proto::Event;
+use naosoccer_proto::{Event, Team};
 
-use super::Outcome;
+use super::{Command, Outcome};
 
 #[derive(Debug, Clone, Copy)]
 pub struct Clock {
     total_ticks: u64,
     control_hz: f32,
+    /// The first tick of the second half (`total_ticks` with one half).
+    second_half: u64,
 }
 
 impl Clock {
-    pub fn new(minutes: f32, control_hz: f32) -> Clock {
+    pub fn new(minutes: f32, control_hz: f32, halves: u32) -> Clock {
+        let total_ticks = (f64::from(minutes) * 60.0 * f64::from(control_hz))
+            .round()
+            .max(1.0) as u64;
+        let second_half = if halves >= 2 && total_ticks >= 2 {
+            total_ticks / 2
+        } else {
+            total_ticks
+        };
         Clock {
-            total_ticks: (f64::from(minutes) * 60.0 * f64::from(control_hz))
-                .round()
-                .max(1.0) as u64,
+            total_ticks,
             control_hz,
+            second_half,
         }
     }
 
     pub fn total_ticks(&self) -> u64 {
         self.total_ticks
+    }
+
+    /// The half that the tick `tick` is in: 1 or 2.
+    pub fn half(&self, tick: u64) -> u8 {
+        if tick >= self.second_half {
+            2
+        } else {
+            1
+        }
+    }
+
+    /// At the last tick of the first half: `HalfTime` and the second half's
+    /// kick-off by `second_kicker`. Returns whether it was half time.
+    pub fn check_half_time(&self, tick: u64, second_kicker: Team, out: &mut Outcome) -> bool {
+        let half_time = self.second_half < self.total_ticks && tick + 1 == self.second_half;
+        if half_time {
+            out.events.push(Event::HalfTime { tick });
+            out.commands.push(Command::KickOff {
+                team: second_kicker,
+            });
+        }
+        half_time
     }
 
     /// Seconds of game time left when `tick` ticks have been played.
@@ -46,7 +80,7 @@ mod tests {
 
     #[test]
     fn ten_minutes_at_ten_hertz_is_six_thousand_ticks() {
-        let c = Clock::new(10.0, 10.0);
+        let c = Clock::new(10.0, 10.0, 1);
         assert_eq!(c.total_ticks(), 6000);
         assert_eq!(c.time_left(0), 600.0);
         assert_eq!(c.time_left(5990), 1.0);
@@ -54,5 +88,26 @@ mod tests {
         assert!(!c.check(5998, &mut out));
         assert!(c.check(5999, &mut out));
         assert_eq!(out.events, vec![Event::End { tick: 5999 }]);
+    }
+
+    #[test]
+    fn two_halves_split_the_ticks_and_the_other_team_kicks_off_the_second() {
+        let c = Clock::new(10.0, 10.0, 2);
+        assert_eq!(
+            (c.half(0), c.half(2999), c.half(3000), c.half(5999)),
+            (1, 1, 2, 2)
+        );
+        let mut out = Outcome::default();
+        assert!(!c.check_half_time(2998, Team::Red, &mut out));
+        assert!(!c.check_half_time(3000, Team::Red, &mut out));
+        assert!(out.events.is_empty());
+        assert!(c.check_half_time(2999, Team::Red, &mut out));
+        assert_eq!(out.events, vec![Event::HalfTime { tick: 2999 }]);
+        assert_eq!(out.commands, vec![Command::KickOff { team: Team::Red }]);
+        // One half: never half time.
+        let one = Clock::new(10.0, 10.0, 1);
+        let mut out = Outcome::default();
+        assert!((0..6000).all(|t| !one.check_half_time(t, Team::Red, &mut out)));
+        assert_eq!(one.half(5999), 1);
     }
 }

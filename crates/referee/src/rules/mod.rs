@@ -3,7 +3,7 @@
 //! own type) that pushes [`Event`]s and [`Command`]s into an [`Outcome`].
 //! Rules never touch the sim: [`crate::Match`] applies the commands.
 
-use naosoccer_proto::{Event, RobotId, Team};
+use naosoccer_proto::{Event, RobotId, SetPlayKind, Team};
 use naosoccer_sim::{SimConfig, Snapshot};
 
 pub mod clock;
@@ -13,20 +13,29 @@ pub mod kickoff;
 pub mod out_of_bounds;
 pub mod pass;
 pub mod possession;
+pub mod set_play;
 
 pub use clock::Clock;
 pub use fall::FallRule;
 pub use goal::GoalRule;
 pub use kickoff::KickOff;
 pub use out_of_bounds::OutOfBoundsRule;
-pub use pass::PassRule;
+pub use out_of_bounds::Restart;
+pub use pass::{PassMade, PassRule};
 pub use possession::PossessionRule;
+pub use set_play::{ActiveSetPlay, SetPlayRule};
 
 /// What a rule asks the driver to do to the world.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Command {
-    /// Put the ball at rest at (x, y), world frame.
-    PlaceBall { x: f32, y: f32 },
+    /// Put the ball at rest at (x, y), world frame, for a set play that
+    /// `team` takes (kick-in, goal kick or corner kick).
+    SetPlay {
+        kind: SetPlayKind,
+        team: Team,
+        x: f32,
+        y: f32,
+    },
     /// Put a robot upright and at rest at (x, y) with a heading, world frame.
     ResetRobot {
         robot: RobotId,

@@ -1,72 +1,136 @@
-//! Out of bounds (the paper's `check_out_of_bounds` / `check_out_of_pitch`):
-//! a ball wholly over a line (and not a goal) is put back in at the nearest
-//! legal point inside; a robot whose torso is well outside the lines is reset
-//! to its predetermined position.
+//! Out of bounds (the paper's `check_out_of_bounds` / `check_out_of_pitch`,
+//! with SPL's restarts): a ball wholly over a line (and not a goal) restarts
+//! with a set play for the team that did not touch it last:
+//!
+//! - over a touch line: a **kick-in**, the ball on the touch line where it
+//!   left (`ball_inset` inside it);
+//! - over a goal line, last touched by the attackers (or by nobody): a
+//!   **goal kick** for the defenders, the ball on the front corner of their
+//!   goal area on the side where it left;
+//! - over a goal line, last touched by the defenders: a **corner kick** for
+//!   the attackers, the ball in the corner on that side (`ball_inset` inside
+//!   both lines).
+//!
+//! Which line a ball crossed near a corner: the one it is further past.
+//! A kick-in after a ball that nobody has touched goes to the team whose
+//! half it left from (its defenders). A robot whose torso is well outside
+//! the lines, standing or lying, is reset upright to its predetermined
+//! position.
 
-use naosoccer_proto::{Event, RobotId};
+use naosoccer_proto::{Event, RobotId, SetPlayKind, Team};
 use naosoccer_sim::Snapshot;
 
 use super::{last_touch, Command, Field, KickOff, Outcome};
+
+/// A restart the rule awards.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Restart {
+    pub kind: SetPlayKind,
+    /// The team that takes it.
+    pub team: Team,
+    /// Where the ball goes, world frame.
+    pub x: f32,
+    pub y: f32,
+}
 
 #[derive(Debug, Clone, Copy)]
 pub struct OutOfBoundsRule {
     field: Field,
     ball_inset: f32,
     robot_margin: f32,
+    goal_area_depth: f32,
+    goal_area_half_width: f32,
 }
 
 impl OutOfBoundsRule {
-    pub fn new(field: Field, ball_inset: f32, robot_margin: f32) -> OutOfBoundsRule {
+    pub fn new(
+        field: Field,
+        ball_inset: f32,
+        robot_margin: f32,
+        goal_area_depth: f32,
+        goal_area_width: f32,
+    ) -> OutOfBoundsRule {
         OutOfBoundsRule {
             field,
             ball_inset,
             robot_margin,
+            goal_area_depth,
+            goal_area_half_width: goal_area_width / 2.0,
         }
     }
 
-    /// Where an out ball goes back in: the nearest point of the pitch shrunk
-    /// by the inset. `None` while the ball is in play.
-    pub fn ball_restart(&self, snap: &Snapshot) -> Option<(f32, f32)> {
+    /// The set play an out ball restarts with; `None` while it is in play.
+    /// `last` is the team that touched it last, if any.
+    pub fn restart(&self, x: f32, y: f32, last: Option<Team>) -> Option<Restart> {
         let f = &self.field;
-        let [x, y, _] = snap.ball.pos;
         if f.contains(x, y, f.ball_radius) {
             return None;
         }
-        let hx = (f.half_length - self.ball_inset).max(0.0);
-        let hy = (f.half_width - self.ball_inset).max(0.0);
-        Some((x.clamp(-hx, hx), y.clamp(-hy, hy)))
+        let over_goal_line = x.abs() - f.half_length > y.abs() - f.half_width;
+        let side_y = if y < 0.0 { -1.0 } else { 1.0 };
+        if !over_goal_line {
+            // Kick-in for the team that did not touch it last.
+            let team = match last {
+                Some(t) => t.other(),
+                // Nobody touched it: the defenders of the half it left from.
+                None if x < 0.0 => Team::Blue,
+                None => Team::Red,
+            };
+            let hx = f.half_length - self.ball_inset;
+            return Some(Restart {
+                kind: SetPlayKind::KickIn,
+                team,
+                x: x.clamp(-hx, hx),
+                y: side_y * (f.half_width - self.ball_inset),
+            });
+        }
+        // Over the goal line of the team defending that end: blue defends -x.
+        let defenders = if x < 0.0 { Team::Blue } else { Team::Red };
+        let side_x = if x < 0.0 { -1.0 } else { 1.0 };
+        if last == Some(defenders) {
+            Some(Restart {
+                kind: SetPlayKind::CornerKick,
+                team: defenders.other(),
+                x: side_x * (f.half_length - self.ball_inset),
+                y: side_y * (f.half_width - self.ball_inset),
+            })
+        } else {
+            Some(Restart {
+                kind: SetPlayKind::GoalKick,
+                team: defenders,
+                x: side_x * (f.half_length - self.goal_area_depth),
+                y: side_y * self.goal_area_half_width,
+            })
+        }
     }
 
-    /// The ball: call only when no goal was scored this tick.
-    pub fn check_ball(&self, snap: &Snapshot, tick: u64, out: &mut Outcome) -> bool {
-        let Some((x, y)) = self.ball_restart(snap) else {
-            return false;
-        };
+    /// The ball: call only when no goal was scored this tick. Emits
+    /// `BallOut` and the set play's award, and asks for it.
+    pub fn check_ball(&self, snap: &Snapshot, tick: u64, out: &mut Outcome) -> Option<Restart> {
+        let [x, y, _] = snap.ball.pos;
         let last = last_touch(snap).map(RobotId::team);
+        let r = self.restart(x, y, last)?;
         out.events.push(Event::BallOut {
             tick,
-            x,
-            y,
+            x: r.x,
+            y: r.y,
             last_touch: last,
         });
-        out.commands.push(Command::PlaceBall { x, y });
-        true
+        out.commands.push(Command::SetPlay {
+            kind: r.kind,
+            team: r.team,
+            x: r.x,
+            y: r.y,
+        });
+        Some(r)
     }
 
-    /// The robots. `down[i]`: robot i lies fallen; a lying robot is left
-    /// where it is until it has got up.
-    pub fn check_robots(
-        &self,
-        snap: &Snapshot,
-        down: &[bool],
-        kickoff: &KickOff,
-        tick: u64,
-        out: &mut Outcome,
-    ) {
+    /// The robots: one whose torso is further than the margin outside the
+    /// lines goes back to its predetermined place, upright, whether it
+    /// stands or lies.
+    pub fn check_robots(&self, snap: &Snapshot, kickoff: &KickOff, tick: u64, out: &mut Outcome) {
         for (i, r) in snap.robots.iter().enumerate() {
-            if down.get(i).copied().unwrap_or(false)
-                || self.field.contains(r.pos[0], r.pos[1], self.robot_margin)
-            {
+            if self.field.contains(r.pos[0], r.pos[1], self.robot_margin) {
                 continue;
             }
             let Some(robot) = RobotId::from_index(i) else {
@@ -91,37 +155,122 @@ mod tests {
     use crate::rules::testing::{field, snapshot};
 
     fn rule() -> OutOfBoundsRule {
-        OutOfBoundsRule::new(field(), 0.2, 0.3)
+        OutOfBoundsRule::new(field(), 0.05, 0.3, 0.6, 3.4)
     }
 
     #[test]
     fn ball_in_play_is_left_alone() {
-        let mut s = snapshot();
-        s.ball.pos = [2.9, 2.2, 0.05];
-        assert_eq!(rule().ball_restart(&s), None);
+        assert_eq!(rule().restart(2.9, 2.2, Some(Team::Blue)), None);
+        // On the line is in.
+        assert_eq!(rule().restart(1.0, 2.25 + 0.04, None), None);
     }
 
     #[test]
-    fn ball_over_touch_line_goes_back_at_nearest_point_inside() {
+    fn touch_line_gives_a_kick_in_to_the_other_team_where_it_left() {
+        let r = rule().restart(1.0, 2.4, Some(Team::Blue)).unwrap();
+        assert_eq!(
+            r,
+            Restart {
+                kind: SetPlayKind::KickIn,
+                team: Team::Red,
+                x: 1.0,
+                y: 2.2
+            }
+        );
+        let r = rule().restart(-2.99, -2.5, Some(Team::Red)).unwrap();
+        assert_eq!(
+            (r.kind, r.team, r.x, r.y),
+            (SetPlayKind::KickIn, Team::Blue, -2.95, -2.2)
+        );
+        // Nobody touched it: the defenders of that half.
+        assert_eq!(rule().restart(1.0, 2.4, None).unwrap().team, Team::Red);
+        assert_eq!(rule().restart(-1.0, 2.4, None).unwrap().team, Team::Blue);
+    }
+
+    #[test]
+    fn attackers_over_the_goal_line_give_a_goal_kick() {
+        // Blue attacks +x; blue kicked it wide of red's goal.
+        let r = rule().restart(3.2, -1.8, Some(Team::Blue)).unwrap();
+        assert_eq!(
+            r,
+            Restart {
+                kind: SetPlayKind::GoalKick,
+                team: Team::Red,
+                x: 2.4,
+                y: -1.7
+            }
+        );
+        let r = rule().restart(-3.2, 1.5, None).unwrap();
+        assert_eq!(
+            (r.kind, r.team, r.x, r.y),
+            (SetPlayKind::GoalKick, Team::Blue, -2.4, 1.7)
+        );
+    }
+
+    #[test]
+    fn defenders_over_their_own_goal_line_give_a_corner_kick() {
+        let r = rule().restart(3.2, 1.5, Some(Team::Red)).unwrap();
+        assert_eq!(
+            r,
+            Restart {
+                kind: SetPlayKind::CornerKick,
+                team: Team::Blue,
+                x: 2.95,
+                y: 2.2
+            }
+        );
+        let r = rule().restart(-3.1, -1.4, Some(Team::Blue)).unwrap();
+        assert_eq!(
+            (r.kind, r.team, r.x, r.y),
+            (SetPlayKind::CornerKick, Team::Red, -2.95, -2.2)
+        );
+    }
+
+    #[test]
+    fn near_a_corner_the_line_it_is_further_past_decides() {
+        // 0.3 past the goal line, 0.1 past the touch line: goal line.
+        let r = rule().restart(3.3, 2.35, Some(Team::Blue)).unwrap();
+        assert_eq!(r.kind, SetPlayKind::GoalKick);
+        // 0.1 past the goal line, 0.3 past the touch line: touch line.
+        let r = rule().restart(3.1, 2.55, Some(Team::Blue)).unwrap();
+        assert_eq!(r.kind, SetPlayKind::KickIn);
+    }
+
+    #[test]
+    fn check_ball_reports_and_asks_for_the_set_play() {
         let mut s = snapshot();
         s.ball.pos = [1.0, 2.5, 0.05];
-        assert_eq!(rule().ball_restart(&s), Some((1.0, 2.05)));
-        s.ball.pos = [-3.4, -2.6, 0.05];
-        assert_eq!(rule().ball_restart(&s), Some((-2.8, -2.05)));
+        s.robots[2].last_ball_touch_step = Some(10);
+        let mut out = Outcome::default();
+        let r = rule().check_ball(&s, 7, &mut out).unwrap();
+        assert_eq!(r.team, Team::Red);
+        assert_eq!(
+            out.events,
+            vec![Event::BallOut {
+                tick: 7,
+                x: 1.0,
+                y: 2.2,
+                last_touch: Some(Team::Blue)
+            }]
+        );
+        assert_eq!(
+            out.commands,
+            vec![Command::SetPlay {
+                kind: SetPlayKind::KickIn,
+                team: Team::Red,
+                x: 1.0,
+                y: 2.2
+            }]
+        );
     }
 
     #[test]
-    fn robot_outside_is_reset_home_unless_lying() {
+    fn robot_outside_is_reset_home_standing_or_lying() {
         let mut s = snapshot();
-        s.robots[5].pos = [0.0, -2.9, 0.3];
-        let kickoff = KickOff::new(&RulesConfig::default());
+        s.robots[5].pos = [0.0, -2.9, 0.1];
+        let kickoff = KickOff::new(&RulesConfig::default(), Team::Blue);
         let mut out = Outcome::default();
-        let mut down = [false; 8];
-        down[5] = true;
-        rule().check_robots(&s, &down, &kickoff, 7, &mut out);
-        assert!(out.events.is_empty());
-        down[5] = false;
-        rule().check_robots(&s, &down, &kickoff, 7, &mut out);
+        rule().check_robots(&s, &kickoff, 7, &mut out);
         let robot = RobotId::from_index(5).unwrap();
         assert_eq!(out.events, vec![Event::RobotOut { tick: 7, robot }]);
         let [x, y, heading] = kickoff.home(robot);

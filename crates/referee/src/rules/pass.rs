@@ -12,6 +12,18 @@ pub struct PassRule {
     holder: Option<RobotId>,
     /// Whether `holder` has kicked the ball since it became the holder.
     kicked: bool,
+    /// Where the ball was when `holder` last kicked it (world frame).
+    kicked_at: [f32; 2],
+}
+
+/// A pass the rule counted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PassMade {
+    pub from: RobotId,
+    pub to: RobotId,
+    /// Ball positions at the kick and at the reception, world frame.
+    pub start: [f32; 2],
+    pub end: [f32; 2],
 }
 
 impl PassRule {
@@ -27,38 +39,57 @@ impl PassRule {
     /// The rule's memory as one number, for the match's state hash.
     pub fn fingerprint(&self) -> u64 {
         let holder = self.holder.map_or(0xff, |r| r.index() as u64);
-        holder << 1 | u64::from(self.kicked)
+        let at =
+            u64::from(self.kicked_at[0].to_bits()) << 32 | u64::from(self.kicked_at[1].to_bits());
+        (holder << 1 | u64::from(self.kicked)) ^ at.rotate_left(9)
     }
 
-    /// A kick that moved the ball. A kicker that had not been seen in control
-    /// (the ball reached its foot between two ticks) becomes the holder.
-    pub fn kick(&mut self, robot: RobotId) {
+    /// A kick that moved the ball, which lay at `ball` (world frame). A
+    /// kicker that had not been seen in control (the ball reached its foot
+    /// between two ticks) becomes the holder.
+    pub fn kick(&mut self, robot: RobotId, ball: [f32; 2]) {
         if self.holder != Some(robot) {
             self.holder = Some(robot);
         }
         self.kicked = true;
+        self.kicked_at = ball;
     }
 
-    /// The tick's controller, after the tick's kicks were reported.
-    pub fn control(&mut self, controller: Option<RobotId>, tick: u64, out: &mut Outcome) {
-        let Some(to) = controller else {
-            return;
-        };
+    /// The tick's controller, after the tick's kicks were reported; `ball`
+    /// is where the ball is now. Returns the pass made, if any.
+    pub fn control(
+        &mut self,
+        controller: Option<RobotId>,
+        ball: [f32; 2],
+        tick: u64,
+        out: &mut Outcome,
+    ) -> Option<PassMade> {
+        let to = controller?;
         if self.holder == Some(to) {
-            return;
+            return None;
         }
+        let mut made = None;
         if let Some(from) = self.holder {
             if self.kicked && from.team() == to.team() {
+                let start = self.kicked_at;
+                let distance = (ball[0] - start[0]).hypot(ball[1] - start[1]);
                 out.events.push(Event::Pass {
                     tick,
                     from,
                     to,
-                    distance: 0.0,
+                    distance,
+                });
+                made = Some(PassMade {
+                    from,
+                    to,
+                    start,
+                    end: ball,
                 });
             }
         }
         self.holder = Some(to);
         self.kicked = false;
+        made
     }
 }
 
@@ -83,20 +114,30 @@ mod tests {
         let (a, b) = (r(Team::Blue, 1), r(Team::Blue, 2));
         let mut rule = PassRule::new();
         let mut out = Outcome::default();
-        rule.control(Some(a), 1, &mut out);
-        rule.kick(a);
-        rule.control(None, 2, &mut out);
-        rule.control(Some(b), 5, &mut out);
-        rule.control(Some(b), 6, &mut out);
-        rule.control(None, 7, &mut out);
-        rule.control(Some(b), 8, &mut out);
+        let z = [0.0, 0.0];
+        rule.control(Some(a), z, 1, &mut out);
+        rule.kick(a, [1.0, 1.0]);
+        rule.control(None, z, 2, &mut out);
+        let made = rule.control(Some(b), [4.0, 5.0], 5, &mut out);
+        assert_eq!(
+            made,
+            Some(PassMade {
+                from: a,
+                to: b,
+                start: [1.0, 1.0],
+                end: [4.0, 5.0]
+            })
+        );
+        rule.control(Some(b), z, 6, &mut out);
+        rule.control(None, z, 7, &mut out);
+        rule.control(Some(b), z, 8, &mut out);
         assert_eq!(
             out.events,
             vec![Event::Pass {
                 tick: 5,
                 from: a,
                 to: b,
-                distance: 0.0,
+                distance: 5.0,
             }]
         );
     }
@@ -106,18 +147,19 @@ mod tests {
         let (a, b, o) = (r(Team::Blue, 1), r(Team::Blue, 2), r(Team::Red, 0));
         let mut rule = PassRule::new();
         let mut out = Outcome::default();
+        let z = [0.0, 0.0];
         // Taken off a teammate's feet without a kick.
-        rule.control(Some(a), 1, &mut out);
-        rule.control(Some(b), 2, &mut out);
+        rule.control(Some(a), z, 1, &mut out);
+        rule.control(Some(b), z, 2, &mut out);
         // Kicked, intercepted, then back to blue.
-        rule.kick(b);
-        rule.control(Some(o), 3, &mut out);
-        rule.control(Some(a), 4, &mut out);
+        rule.kick(b, z);
+        rule.control(Some(o), z, 3, &mut out);
+        rule.control(Some(a), z, 4, &mut out);
         assert_eq!(passes(&out), 0);
         // A restart between kick and reception.
-        rule.kick(a);
+        rule.kick(a, z);
         rule.reset();
-        rule.control(Some(b), 9, &mut out);
+        rule.control(Some(b), z, 9, &mut out);
         assert_eq!(passes(&out), 0);
     }
 }

@@ -1,0 +1,527 @@
+//! Physical plausibility over whole matches (issue 12): twenty ten-minute
+//! matches of mixed teams (scripted, random, idle), played in process and
+//! watched after every physics step. Over all of them:
+//!
+//! - no ball passes through a robot between two physics steps: the segment
+//!   the ball's centre travelled in a step never enters a robot's thigh, shin
+//!   or foot collider (contact keeps the centre a radius away);
+//! - no placement overlaps a body: after each tick, every body the referee's
+//!   commands moved (ball put back, robot reset, stood up, kick-off, set
+//!   play) is clear of every other body;
+//! - no lying robot moves unless something hits it: a robot that has lain a
+//!   1.5 s, and that nothing (robot or ball) has touched for 1.5 s,
+//!   stays where it lies, in position and orientation;
+//! - no ball rests on a foot for more than 0.5 s;
+//! - every out is restarted by the set play the rules name (SPL: a kick-in
+//!   over a touch line, over a goal line a corner kick when the defenders
+//!   touched it last and a goal kick otherwise, for the team that did not
+//!   touch it last), with the ball put near the spot the rules name.
+//!
+//! The geometry is the real one: the URDF's collision primitives placed by
+//! each robot's recorded torso pose, measured with parry (rapier's geometry).
+//! Every tick also passes through [`Audit::tick`] with the tick's events, the
+//! place for per-tick checks over the event stream.
+
+use naosoccer::runner::build_policies;
+use naosoccer_client::PolicyKind;
+use naosoccer_proto::{Action, Event, Observation, RobotId, SetPlayKind, Team, ROBOTS};
+use naosoccer_referee::{blank_observation, Match, MatchConfig};
+use naosoccer_sim::{BallState, Primitive, RobotModel, RobotState, Sim};
+use rapier3d::math::{Pose, Rot3, Vec3};
+use rapier3d::parry::query::{self, Ray};
+use rapier3d::parry::shape::{Ball, Capsule, Cuboid, Cylinder, Shape, SharedShape};
+
+/// Something touches a lying robot when one of its colliders comes this close
+/// to one of the robot's, metres.
+const TOUCH: f32 = 0.01;
+/// A fallen robot may settle this long before it must lie still, seconds;
+/// so may one that something touched, after the touch.
+const SETTLE: f32 = 1.5;
+/// Lying still: it moves less than this from where it settled, metres...
+const LIE_DRIFT: f32 = 0.05;
+/// ... and turns less than this, radians.
+const LIE_TURN: f32 = 0.2;
+/// A ball resting on a foot longer than this fails, seconds.
+const FOOT_REST: f32 = 0.5;
+
+/// One robot collider: its shape, pose in the torso frame, and whether it is
+/// part of a leg (thigh, shin, foot).
+struct Part {
+    shape: SharedShape,
+    local: Pose,
+    leg: bool,
+    foot: bool,
+}
+
+fn parts(model: &RobotModel) -> Vec<Part> {
+    model
+        .collision_shapes()
+        .iter()
+        .map(|s| {
+            let (shape, local) = match s.primitive {
+                Primitive::Cuboid { half_extents } => {
+                    (SharedShape::new(Cuboid::new(half_extents)), s.pose)
+                }
+                Primitive::Sphere { radius } => (SharedShape::new(Ball::new(radius)), s.pose),
+                Primitive::Cylinder {
+                    radius,
+                    half_length,
+                } => (
+                    SharedShape::new(Cylinder::new(half_length, radius)),
+                    s.pose
+                        * Pose::from_rotation(Rot3::from_rotation_x(std::f32::consts::FRAC_PI_2)),
+                ),
+                Primitive::Capsule {
+                    radius,
+                    half_length,
+                } => (
+                    SharedShape::new(Capsule::new_z(half_length, radius)),
+                    s.pose,
+                ),
+            };
+            let foot = s.link.ends_with("Foot");
+            let leg = foot || s.link.ends_with("Tibia") || s.link.ends_with("Thigh");
+            Part {
+                shape,
+                local,
+                leg,
+                foot,
+            }
+        })
+        .collect()
+}
+
+/// The distance between two placed shapes, 0 when they overlap.
+fn gap(s1: &dyn Shape, p1: &Pose, s2: &dyn Shape, p2: &Pose) -> f32 {
+    query::distance(p1, s1, p2, s2).map_or(f32::INFINITY, |d| d.distance)
+}
+
+fn torso(r: &RobotState) -> Pose {
+    Pose::from_parts(Vec3::from_array(r.pos), Rot3::from_array(r.rotation))
+}
+
+/// A copy of the bodies' state (the snapshot minus its kick list).
+#[derive(Clone, Copy)]
+struct Bodies {
+    ball: BallState,
+    robots: [RobotState; ROBOTS],
+}
+
+impl Bodies {
+    fn of(sim: &Sim) -> Bodies {
+        let s = sim.snapshot();
+        Bodies {
+            ball: s.ball,
+            robots: s.robots,
+        }
+    }
+}
+
+/// Violations and figures over all matches.
+#[derive(Default)]
+struct Audit {
+    steps: u64,
+    ball_through: Vec<String>,
+    overlaps: Vec<String>,
+    lying_moved: Vec<String>,
+    ball_on_foot: Vec<String>,
+    wrong_restarts: Vec<String>,
+    /// Set plays seen, by kind: kick-in, goal kick, corner kick.
+    restarts: [u64; 3],
+    placements: u64,
+    lying_watched_steps: u64,
+    max_lying_drift: f32,
+    max_foot_rest_steps: u32,
+}
+
+/// What one match's watcher remembers between steps.
+struct Watch {
+    seed: u64,
+    ball_radius: f32,
+    dt: f32,
+    prev: Option<Bodies>,
+    /// Steps each robot has lain untouched.
+    fallen_for: [u32; ROBOTS],
+    /// Where each lying, undisturbed robot settled.
+    settled: [Option<(Vec3, Rot3)>; ROBOTS],
+    /// Steps the ball has rested on a foot.
+    foot_rest: u32,
+}
+
+impl Watch {
+    fn new(seed: u64, sim: &Sim) -> Watch {
+        Watch {
+            seed,
+            ball_radius: sim.config().ball_radius,
+            dt: sim.dt(),
+            prev: None,
+            fallen_for: [0; ROBOTS],
+            settled: [None; ROBOTS],
+            foot_rest: 0,
+        }
+    }
+
+    /// After every physics step.
+    fn physics_step(&mut self, a: &mut Audit, parts: &[Part], sim: &Sim) {
+        a.steps += 1;
+        let now = Bodies::of(sim);
+        let step = sim.steps();
+        if let Some(prev) = self.prev {
+            self.ball_through(a, parts, &prev, &now, step);
+        }
+        self.lying(a, parts, &now, step);
+        self.foot_rest(a, parts, &now, step);
+        self.prev = Some(now);
+    }
+
+    fn ball_through(&self, a: &mut Audit, parts: &[Part], prev: &Bodies, now: &Bodies, step: u64) {
+        let p0 = Vec3::from_array(prev.ball.pos);
+        let p1 = Vec3::from_array(now.ball.pos);
+        let travel = p1 - p0;
+        for (i, r) in now.robots.iter().enumerate() {
+            let t = Vec3::from_array(r.pos);
+            // Legs reach 0.4 m from the torso origin at most.
+            if (p0 - t).length().min((p1 - t).length()) > 0.4 + travel.length() {
+                continue;
+            }
+            let pose = torso(r);
+            for part in parts.iter().filter(|p| p.leg) {
+                let at = pose * part.local;
+                let hit = if travel.length() > 1e-6 {
+                    part.shape.intersects_ray(&at, &Ray::new(p0, travel), 1.0)
+                } else {
+                    part.shape.contains_point(&at, p1)
+                };
+                if hit {
+                    a.ball_through.push(format!(
+                        "seed {} step {step}: ball centre {:?} -> {:?} ({:.2} m/s) inside robot {i}'s leg",
+                        self.seed,
+                        prev.ball.pos,
+                        now.ball.pos,
+                        travel.length() / self.dt
+                    ));
+                    return;
+                }
+            }
+        }
+    }
+
+    fn lying(&mut self, a: &mut Audit, parts: &[Part], now: &Bodies, step: u64) {
+        let settle = (SETTLE / self.dt).round() as u32;
+        let ball = Ball::new(self.ball_radius);
+        let ball_pose = Pose::from_translation(Vec3::from_array(now.ball.pos));
+        for i in 0..ROBOTS {
+            let r = &now.robots[i];
+            if !r.fallen {
+                self.fallen_for[i] = 0;
+                self.settled[i] = None;
+                continue;
+            }
+            let t = Vec3::from_array(r.pos);
+            let mine = torso(r);
+            let near = |s: &dyn Shape, p: &Pose| {
+                parts
+                    .iter()
+                    .any(|q| gap(q.shape.as_ref(), &(mine * q.local), s, p) < TOUCH)
+            };
+            let touched = ((t - ball_pose.translation).length() < 0.5 && near(&ball, &ball_pose))
+                || now.robots.iter().enumerate().any(|(j, o)| {
+                    if j == i || (Vec3::from_array(o.pos) - t).length() > 1.0 {
+                        return false;
+                    }
+                    let theirs = torso(o);
+                    parts
+                        .iter()
+                        .any(|q| near(q.shape.as_ref(), &(theirs * q.local)))
+                });
+            if touched {
+                self.fallen_for[i] = 0;
+            } else {
+                self.fallen_for[i] += 1;
+            }
+            if self.fallen_for[i] < settle {
+                self.settled[i] = None;
+                continue;
+            }
+            a.lying_watched_steps += 1;
+            let rot = Rot3::from_array(r.rotation);
+            let Some((p0, q0)) = self.settled[i] else {
+                self.settled[i] = Some((t, rot));
+                continue;
+            };
+            let drift = (t - p0).length();
+            a.max_lying_drift = a.max_lying_drift.max(drift);
+            let turn = q0.angle_between(rot);
+            if drift > LIE_DRIFT || turn > LIE_TURN {
+                a.lying_moved.push(format!(
+                    "seed {} step {step}: lying robot {i} moved {drift:.3} m, turned {turn:.2} rad with nothing near",
+                    self.seed
+                ));
+                // Report it once per settling.
+                self.settled[i] = Some((t, rot));
+            }
+        }
+    }
+
+    fn foot_rest(&mut self, a: &mut Audit, parts: &[Part], now: &Bodies, step: u64) {
+        let b = Vec3::from_array(now.ball.pos);
+        let v = Vec3::from_array(now.ball.vel).length();
+        let raised = b.z > self.ball_radius + 0.005 && v < 0.1;
+        let on_foot = raised
+            && now.robots.iter().any(|r| {
+                let pose = torso(r);
+                parts.iter().filter(|p| p.foot).any(|p| {
+                    let d = query::distance(
+                        &(pose * p.local),
+                        p.shape.as_ref(),
+                        &Pose::from_translation(b),
+                        &Ball::new(self.ball_radius),
+                    )
+                    .map_or(f32::INFINITY, |d| d.distance);
+                    d < 0.01
+                })
+            });
+        if on_foot {
+            self.foot_rest += 1;
+            a.max_foot_rest_steps = a.max_foot_rest_steps.max(self.foot_rest);
+            if self.foot_rest as f32 * self.dt > FOOT_REST {
+                a.ball_on_foot.push(format!(
+                    "seed {} step {step}: ball at {:?} has rested on a foot for {:.2} s",
+                    self.seed,
+                    now.ball.pos,
+                    self.foot_rest as f32 * self.dt
+                ));
+                self.foot_rest = 0;
+            }
+        } else {
+            self.foot_rest = 0;
+        }
+    }
+
+    /// After every control tick, with its events: bodies the referee's
+    /// commands moved must be clear of every other body.
+    fn tick(&mut self, a: &mut Audit, parts: &[Part], m: &Match, events: &[Event]) {
+        let Some(before) = self.prev else { return };
+        self.restarts(a, m, &before, events);
+        let now = Bodies::of(m.sim());
+        let r = self.ball_radius;
+        let ball_moved = before.ball.pos != now.ball.pos;
+        let moved: [bool; ROBOTS] =
+            std::array::from_fn(|i| before.robots[i].pos != now.robots[i].pos);
+        let robot_shapes = |i: usize| {
+            let pose = torso(&now.robots[i]);
+            parts
+                .iter()
+                .map(move |p| (p.shape.as_ref(), pose * p.local))
+        };
+        let ball_shape = Ball::new(r);
+        let ball_pose = Pose::from_translation(Vec3::from_array(now.ball.pos));
+        if ball_moved {
+            a.placements += 1;
+            for j in 0..ROBOTS {
+                for (s, p) in robot_shapes(j) {
+                    let d = gap(&ball_shape, &ball_pose, s, &p);
+                    if d <= 0.0 {
+                        a.overlaps.push(format!(
+                            "seed {} tick {}: ball placed at {:?} overlaps robot {j}",
+                            self.seed,
+                            m.tick(),
+                            now.ball.pos
+                        ));
+                    }
+                }
+            }
+        }
+        for i in (0..ROBOTS).filter(|&i| moved[i]) {
+            a.placements += 1;
+            let ti = Vec3::from_array(now.robots[i].pos);
+            for (s, p) in robot_shapes(i) {
+                if gap(s, &p, &ball_shape, &ball_pose) <= 0.0 {
+                    a.overlaps.push(format!(
+                        "seed {} tick {}: robot {i} placed at {:?} overlaps the ball",
+                        self.seed,
+                        m.tick(),
+                        now.robots[i].pos
+                    ));
+                }
+            }
+            for j in (0..ROBOTS).filter(|&j| j != i) {
+                if (Vec3::from_array(now.robots[j].pos) - ti).length() > 1.0 {
+                    continue;
+                }
+                let overlap = robot_shapes(i)
+                    .any(|(s1, p1)| robot_shapes(j).any(|(s2, p2)| gap(s1, &p1, s2, &p2) <= 0.0));
+                if overlap {
+                    a.overlaps.push(format!(
+                        "seed {} tick {}: robot {i} placed at {:?} overlaps robot {j} at {:?}",
+                        self.seed,
+                        m.tick(),
+                        now.robots[i].pos,
+                        now.robots[j].pos
+                    ));
+                }
+            }
+        }
+        // Placements are not motion: the next step's segment starts here.
+        self.prev = Some(now);
+        for i in (0..ROBOTS).filter(|&i| moved[i]) {
+            self.settled[i] = None;
+        }
+    }
+}
+
+impl Watch {
+    /// Every `BallOut` is followed, in the same tick, by the set play the
+    /// SPL names for where the ball left (`before`: the bodies after the
+    /// tick's last physics step, before any restart), for the right team,
+    /// with the ball put within 0.3 m of the named spot (nearer spots clear
+    /// of every body are allowed) and inside the field.
+    fn restarts(&self, a: &mut Audit, m: &Match, before: &Bodies, events: &[Event]) {
+        let cfg = m.config();
+        let (hl, hw) = (cfg.sim.field_length / 2.0, cfg.sim.field_width / 2.0);
+        let (inset, depth) = (cfg.rules.ball_inset, cfg.rules.goal_area_depth);
+        let ga = cfg.rules.goal_area_width / 2.0;
+        for (k, e) in events.iter().enumerate() {
+            let Event::BallOut { last_touch, .. } = *e else {
+                continue;
+            };
+            let [x, y, _] = before.ball.pos;
+            let (sx, sy) = (x.signum(), y.signum());
+            let expected = if x.abs() - hl > y.abs() - hw {
+                let defenders = if x < 0.0 { Team::Blue } else { Team::Red };
+                if last_touch == Some(defenders) {
+                    (
+                        SetPlayKind::CornerKick,
+                        defenders.other(),
+                        sx * (hl - inset),
+                        sy * (hw - inset),
+                    )
+                } else {
+                    (SetPlayKind::GoalKick, defenders, sx * (hl - depth), sy * ga)
+                }
+            } else {
+                let team =
+                    last_touch.map_or(if x < 0.0 { Team::Blue } else { Team::Red }, Team::other);
+                (
+                    SetPlayKind::KickIn,
+                    team,
+                    x.clamp(-(hl - inset), hl - inset),
+                    sy * (hw - inset),
+                )
+            };
+            let award = events[k..].iter().find_map(|e| match *e {
+                Event::SetPlay {
+                    play, team, x, y, ..
+                } => Some((play, team, x, y)),
+                _ => None,
+            });
+            let ok = award.is_some_and(|(play, team, ax, ay)| {
+                (play, team) == (expected.0, expected.1)
+                    && (ax - expected.2).hypot(ay - expected.3) <= 0.3
+                    && ax.abs() <= hl
+                    && ay.abs() <= hw
+            });
+            if ok {
+                a.restarts[expected.0.index() - 1] += 1;
+            } else {
+                a.wrong_restarts.push(format!(
+                    "seed {} tick {}: ball out at ({x:.2}, {y:.2}), last touch {last_touch:?}: expected {expected:?}, got {award:?}",
+                    self.seed,
+                    m.tick()
+                ));
+            }
+        }
+    }
+}
+
+/// Plays one whole match of `blue` against `red` under the audit.
+fn audit_match(a: &mut Audit, parts: &[Part], seed: u64, blue: &PolicyKind, red: &PolicyKind) {
+    let cfg = MatchConfig::default();
+    let mut m = Match::new(&cfg, seed).expect("default match");
+    let mut policies = build_policies(seed, blue, red);
+    let mut obs: [Observation; ROBOTS] = std::array::from_fn(|_| blank_observation());
+    let mut actions = [Action::Stay; ROBOTS];
+    let mut events: Vec<Event> = Vec::with_capacity(16);
+    let mut w = Watch::new(seed, m.sim());
+    while !m.is_finished() {
+        for (robot, (o, (p, act))) in RobotId::all().zip(
+            obs.iter_mut()
+                .zip(policies.iter_mut().zip(actions.iter_mut())),
+        ) {
+            m.observe_into(robot.team(), robot.player(), o);
+            *act = p.act(o);
+        }
+        events.clear();
+        events.extend_from_slice(m.step_observed(&actions, |sim| w.physics_step(a, parts, sim)));
+        w.tick(a, parts, &m, &events);
+    }
+}
+
+/// Five of the twenty matches: `first..first + 5` seeds over the team mix.
+fn audit_five(first: u64) -> Audit {
+    let model = RobotModel::builtin().expect("builtin model");
+    let parts = parts(&model);
+    let mixes = [
+        (PolicyKind::Scripted, PolicyKind::Scripted),
+        (PolicyKind::Scripted, PolicyKind::Random),
+        (PolicyKind::Random, PolicyKind::Scripted),
+        (PolicyKind::Random, PolicyKind::Random),
+        (PolicyKind::Scripted, PolicyKind::Idle),
+        (PolicyKind::Idle, PolicyKind::Random),
+    ];
+    let mut a = Audit::default();
+    for seed in first..first + 5 {
+        let (blue, red) = &mixes[seed as usize % mixes.len()];
+        audit_match(&mut a, &parts, seed, blue, red);
+    }
+    a
+}
+
+fn check(a: &Audit) {
+    println!(
+        "{} physics steps, {} placements, {} steps of untouched lying robots (largest drift {:.4} m), longest ball rest on a foot {} steps, restarts [kick-in, goal kick, corner kick] {:?}",
+        a.steps, a.placements, a.lying_watched_steps, a.max_lying_drift, a.max_foot_rest_steps, a.restarts
+    );
+    let show = |what: &str, v: &[String]| {
+        for line in v.iter().take(10) {
+            println!("{what}: {line}");
+        }
+        v.len()
+    };
+    let counts = [
+        show("ball through a robot", &a.ball_through),
+        show("placement overlap", &a.overlaps),
+        show("lying robot moved", &a.lying_moved),
+        show("ball rests on a foot", &a.ball_on_foot),
+        show("wrong restart", &a.wrong_restarts),
+    ];
+    assert_eq!(
+        counts,
+        [0, 0, 0, 0, 0],
+        "[ball through, placement overlaps, lying robots moved, balls on a foot, wrong restarts]"
+    );
+    assert!(
+        a.restarts.iter().sum::<u64>() > 0,
+        "five matches with no ball out at all: the restart check saw nothing"
+    );
+}
+
+#[test]
+fn physics_is_plausible_over_matches_1_to_5() {
+    check(&audit_five(1));
+}
+
+#[test]
+fn physics_is_plausible_over_matches_6_to_10() {
+    check(&audit_five(6));
+}
+
+#[test]
+fn physics_is_plausible_over_matches_11_to_15() {
+    check(&audit_five(11));
+}
+
+#[test]
+fn physics_is_plausible_over_matches_16_to_20() {
+    check(&audit_five(16));
+}
