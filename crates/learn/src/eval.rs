@@ -563,9 +563,10 @@ mod tests {
     }
 
     fn short_config() -> MatchConfig {
-        let mut cfg = MatchConfig::default();
-        cfg.minutes = 0.25;
-        cfg
+        MatchConfig {
+            minutes: 0.25,
+            ..MatchConfig::default()
+        }
     }
 
     #[test]
