@@ -87,13 +87,13 @@ pub struct TrainArgs {
     /// init) or team (the decision-level MDP with the PPO fixes). DQN: paper
     /// (Algorithm 1: per-robot networks, fixed epsilon 0.3) or team (Double
     /// DQN, 3-step returns, Huber loss, epsilon 1 -> 0.05 over 1M
-    /// transitions, one network for the team).
+    /// transitions, one network for the team, on the decision-level MDP).
     #[arg(long, default_value = "paper")]
     preset: String,
-    /// PPO team preset: ticks a movement decision holds.
+    /// Team presets (PPO and DQN): ticks a movement decision holds.
     #[arg(long)]
     persist: Option<u32>,
-    /// PPO team preset: let robots shoot with the ball out of reach.
+    /// Team presets: let robots shoot with the ball out of reach.
     #[arg(long)]
     no_shoot_mask: bool,
     /// PPO: the critic reads the whole team's observations (MAPPO).
@@ -169,9 +169,6 @@ pub struct TrainArgs {
     /// paper: 1; the team preset: 3).
     #[arg(long)]
     n_step: Option<usize>,
-    /// DQN: control ticks each decision holds its action (1: every tick).
-    #[arg(long)]
-    action_repeat: Option<usize>,
     /// DQN: exploration rate (the paper: 0.3, fixed; the team preset: the
     /// rate its schedule ends at).
     #[arg(long)]
@@ -219,10 +216,6 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         anyhow::ensure!(n >= 1, "--n-step must be at least 1");
         cfg.dqn.n_step = n;
     }
-    if let Some(k) = a.action_repeat {
-        anyhow::ensure!(k >= 1, "--action-repeat must be at least 1");
-        cfg.dqn.action_repeat = k;
-    }
     if let Some(m) = a.minibatches {
         cfg.ppo.minibatches = m;
     }
@@ -240,7 +233,11 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         cfg.ppo.lr_critic = lr;
     }
     cfg.ppo.central_critic |= a.central_critic;
-    if let Some(d) = cfg.ppo.decision.as_mut() {
+    let decision = match cfg.algo {
+        Algo::Ppo => cfg.ppo.decision.as_mut(),
+        Algo::Dqn => cfg.dqn.decision.as_mut(),
+    };
+    if let Some(d) = decision {
         if let Some(k) = a.persist {
             anyhow::ensure!(k >= 1, "--persist must be at least 1 tick");
             d.persist = k;

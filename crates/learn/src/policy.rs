@@ -294,7 +294,7 @@ impl LearnedPolicy {
             keys: Vec::new(),
             decision: match cfg.algo {
                 Algo::Ppo => cfg.ppo.decision,
-                Algo::Dqn => None,
+                Algo::Dqn => cfg.dqn.decision,
             },
             holds: BTreeMap::new(),
         }
@@ -513,8 +513,13 @@ impl LearnedPolicy {
                     let q = tch::no_grad(|| net.q(&x));
                     self.out.resize(m * ACTIONS, 0.0);
                     q.copy_data(&mut self.out, m * ACTIONS);
+                    let masks = self.masks_shoot();
                     for (j, &i) in idx.iter().enumerate() {
-                        out[i] = argmax(&self.out[j * ACTIONS..(j + 1) * ACTIONS]);
+                        let row = &mut self.out[j * ACTIONS..(j + 1) * ACTIONS];
+                        if masks && obs[i * OBS_DIM + IN_REACH_FEATURE] <= 0.5 {
+                            row[SHOOT] = f32::NEG_INFINITY;
+                        }
+                        out[i] = argmax(row);
                     }
                 }
             }

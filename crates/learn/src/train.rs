@@ -20,11 +20,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::dqn::{Dqn, DqnConfig, Held, NStep};
+use crate::dqn::{epsilon_greedy, Dqn, DqnConfig, NStep};
 use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
 use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
 use crate::policy::{save_stores, ActMode, Hold, LearnedPolicy};
-use crate::ppo::{Ppo, PpoConfig, Rollout, Transitions};
+use crate::ppo::{Ppo, PpoConfig, Rollout, Transitions, ACTIONS};
 use crate::schedule::ScheduleRunner;
 use crate::LearnError;
 
@@ -1008,11 +1008,183 @@ fn push_critic_row(feats: &[f32], l: usize, r: usize, dim: usize, cw: usize, out
     }
 }
 
+/// One robot's decision in progress (decision-level DQN).
+#[derive(Debug, Clone, Copy, Default)]
+struct OpenDecision {
+    open: bool,
+    action: usize,
+    /// `sum gamma^i r_i` so far, and `gamma^elapsed`.
+    reward: f32,
+    discount: f32,
+}
+
+/// DQN on the decision-level MDP: each tick, the robots free to act whose
+/// last decision ran out decide (epsilon-greedy over the actions allowed
+/// them); a decision closes when the robot next decides, or when the
+/// episode ends, and enters the n-step accumulator as one transition with
+/// its discounted reward and discount `gamma^ticks`.
+fn train_dqn_decisions(
+    cfg: &TrainConfig,
+    out: &Path,
+    progress: &mut dyn FnMut(&Progress<'_>),
+) -> Result<TrainSummary, LearnError> {
+    let decision = cfg
+        .dqn
+        .decision
+        .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
+    let mut env = make_env(cfg)?;
+    let mut run = RunDir::create(out, cfg)?;
+    let scale = run_scale(cfg);
+    let robots = cfg.learners.len();
+    let mut dqn = Dqn::new(cfg.dqn.clone(), robots)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let rows = env.rows();
+    let mut tally = Tally::new(robots);
+    let mut actions = vec![0usize; rows];
+    let mut holds = vec![Hold::default(); rows];
+    let mut open = vec![OpenDecision::default(); rows];
+    let mut open_obs = vec![0.0f32; rows * OBS_DIM];
+    let mut deciding = vec![false; rows];
+    let mut shoot_ok = vec![true; rows];
+    let mut q = Vec::new();
+    let mut nstep = NStep::new(cfg.dqn.n_step, rows);
+    let gamma = cfg.dqn.discount(1);
+    let (mut transitions, mut update, mut step) = (0u64, 0u64, 0usize);
+    let (mut loss_sum, mut loss_n) = (0.0, 0u32);
+    let mut out_rows = Vec::new();
+    while transitions < cfg.steps {
+        let mut any = false;
+        for r in 0..rows {
+            let o = env.learner_observation(r);
+            shoot_ok[r] = !decision.mask_shoot || scale.kick.in_reach(o);
+            deciding[r] = holds[r].must_decide(o);
+            if !deciding[r] {
+                actions[r] = holds[r].held(o);
+            }
+            any |= deciding[r];
+        }
+        if any {
+            let obs = env.observations();
+            dqn.q_values(obs, robots, &mut q);
+            let epsilon = cfg.dqn.epsilon_at(transitions);
+            for r in (0..rows).filter(|&r| deciding[r]) {
+                let row = &obs[r * OBS_DIM..(r + 1) * OBS_DIM];
+                // The decision that ran until now ends in this state.
+                let d = open[r];
+                if d.open {
+                    let ok = shoot_ok[r];
+                    nstep.push(
+                        r,
+                        &open_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
+                        d.action,
+                        d.reward,
+                        d.discount,
+                        false,
+                        &mut |t| {
+                            dqn.remember(r % robots, t.obs, t.action, t.ret, row, t.discount, ok)
+                        },
+                    );
+                }
+                let a = epsilon_greedy(
+                    &q[r * ACTIONS..(r + 1) * ACTIONS],
+                    shoot_ok[r],
+                    epsilon,
+                    &mut rng,
+                );
+                open[r] = OpenDecision {
+                    open: true,
+                    action: a,
+                    reward: 0.0,
+                    discount: 1.0,
+                };
+                open_obs[r * OBS_DIM..(r + 1) * OBS_DIM].copy_from_slice(row);
+                holds[r].start(a, env.learner_observation(r).tick, decision.persist);
+                actions[r] = a;
+            }
+        }
+        let finished = env.step(&actions)?;
+        for r in 0..rows {
+            let d = &mut open[r];
+            if d.open {
+                d.reward += d.discount * env.rewards()[r];
+                d.discount *= gamma;
+            }
+            if env.dones()[r] {
+                if d.open {
+                    let d = *d;
+                    // Terminal: the next observation is never bootstrapped from.
+                    let row = &open_obs[r * OBS_DIM..(r + 1) * OBS_DIM];
+                    nstep.push(r, row, d.action, d.reward, d.discount, true, &mut |t| {
+                        dqn.remember(r % robots, t.obs, t.action, t.ret, row, t.discount, true)
+                    });
+                }
+                open[r].open = false;
+                holds[r].reset();
+            }
+        }
+        tally.add_rewards(env.rewards());
+        tally.episodes.extend(finished);
+        if any {
+            if let Some(l) = dqn.learn(&mut rng) {
+                loss_sum += l;
+                loss_n += 1;
+            }
+        }
+        let before = transitions;
+        transitions += rows as u64;
+        step += 1;
+        if step.is_multiple_of(cfg.log_every.max(1)) || transitions >= cfg.steps {
+            update += 1;
+            let loss = if loss_n > 0 {
+                loss_sum / f64::from(loss_n)
+            } else {
+                f64::NAN
+            };
+            let row = tally.row(
+                update,
+                env.ticks() / cfg.matches as u64,
+                transitions,
+                (loss, f64::NAN, f64::NAN),
+            );
+            loss_sum = 0.0;
+            loss_n = 0;
+            run.write_row(&row)?;
+            progress(&Progress {
+                row: &row,
+                total_steps: cfg.steps,
+            });
+            out_rows.push(row);
+        }
+        let stores: Vec<&tch::nn::VarStore> = dqn.nets.iter().map(|n| &n.vs).collect();
+        if checkpoint_due(before, transitions, cfg.checkpoint_every) {
+            save_stores(
+                &stores,
+                &out.join(format!("checkpoints/step-{transitions}.safetensors")),
+            )?;
+        }
+        if snapshot_due(cfg, before, transitions) {
+            let snap = self_play_snapshot(cfg, Some(&stores))?;
+            env.set_opponent(Opponent::Net(Box::new(snap)));
+        }
+    }
+    let final_weights = out.join("final.safetensors");
+    let stores: Vec<&tch::nn::VarStore> = dqn.nets.iter().map(|n| &n.vs).collect();
+    save_stores(&stores, &final_weights)?;
+    Ok(TrainSummary {
+        rows: out_rows,
+        transitions,
+        final_weights,
+    })
+}
+
 fn train_dqn(
     cfg: &TrainConfig,
     out: &Path,
     progress: &mut dyn FnMut(&Progress<'_>),
 ) -> Result<TrainSummary, LearnError> {
+    if cfg.dqn.decision.is_some() {
+        return train_dqn_decisions(cfg, out, progress);
+    }
     let mut env = make_env(cfg)?;
     let mut run = RunDir::create(out, cfg)?;
     let robots = cfg.learners.len();
@@ -1028,42 +1200,41 @@ fn train_dqn(
     let mut out_rows = Vec::new();
     let mut step = 0usize;
     let mut nstep = NStep::new(cfg.dqn.n_step, rows);
-    // A decision holds its action `action_repeat` ticks (1: every tick).
-    let mut held = Held::new(rows, cfg.dqn.action_repeat);
-    let tick_discount = cfg.dqn.discount(1);
+    // Every transition here lasts one control tick.
+    let discount = cfg.dqn.discount(1);
     while transitions < cfg.steps {
-        let deciding = held.any_free();
-        if deciding {
-            prev.copy_from_slice(env.observations());
-            let epsilon = cfg.dqn.epsilon_at(transitions);
-            dqn.act(&prev, robots, epsilon, &mut rng, &mut actions);
-            held.start(&prev, &actions);
-        }
-        let finished = env.step(held.actions())?;
+        prev.copy_from_slice(env.observations());
+        let epsilon = cfg.dqn.epsilon_at(transitions);
+        dqn.act(&prev, robots, epsilon, &mut rng, &mut actions);
+        let finished = env.step(&actions)?;
         let next = env.observations();
         for i in 0..rows {
-            let done = env.dones()[i];
-            let Some((ret, discount)) = held.tick(i, env.rewards()[i], tick_discount, done) else {
-                continue;
-            };
             let next_obs = &next[i * OBS_DIM..(i + 1) * OBS_DIM];
             nstep.push(
                 i,
-                held.obs(i),
-                held.actions()[i],
-                ret,
+                &prev[i * OBS_DIM..(i + 1) * OBS_DIM],
+                actions[i],
+                env.rewards()[i],
                 discount,
-                done,
-                &mut |t| dqn.remember(i % robots, t.obs, t.action, t.ret, next_obs, t.discount),
+                env.dones()[i],
+                &mut |t| {
+                    dqn.remember(
+                        i % robots,
+                        t.obs,
+                        t.action,
+                        t.ret,
+                        next_obs,
+                        t.discount,
+                        true,
+                    )
+                },
             );
         }
         tally.add_rewards(env.rewards());
         tally.episodes.extend(finished);
-        if deciding {
-            if let Some(l) = dqn.learn(&mut rng) {
-                loss_sum += l;
-                loss_n += 1;
-            }
+        if let Some(l) = dqn.learn(&mut rng) {
+            loss_sum += l;
+            loss_n += 1;
         }
         let before = transitions;
         transitions += rows as u64;

@@ -335,6 +335,51 @@ fn self_play_and_frozen_opponents_train_repeatably() {
     }
 }
 
+/// The decision-level DQN (`team` preset) repeats itself under one seed,
+/// differs under another, and its team plays the decisions it trained
+/// with (held movements, `shoot` masked out of reach).
+#[test]
+fn dqn_team_preset_trains_repeatably_and_plays_its_decision_mdp() {
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let mut cfg = tiny_config(Algo::Dqn, 5);
+    cfg.learners = vec![0, 1, 2, 3];
+    cfg.dqn = naosoccer_learn::dqn::DqnConfig::team();
+    let (dir, a) = short_run(cfg.clone(), "dqn_team_a");
+    let (_, b) = short_run(cfg.clone(), "dqn_team_b");
+    assert_eq!(a, b, "same seed, same metrics");
+    assert!(a.lines().count() > 2, "{a}");
+    cfg.seed = 6;
+    let (_, c) = short_run(cfg.clone(), "dqn_team_c");
+    assert_ne!(a, c, "another seed, other metrics");
+    let p = LearnedPolicy::load(&format!("dqn:{}", dir.display())).unwrap();
+    assert_eq!(p.decision(), cfg.dqn.decision);
+    assert!(p.decision().is_some_and(|d| d.mask_shoot));
+}
+
+/// The `team` preset (Double DQN, 3-step returns, epsilon schedule, shared
+/// network, decision-level MDP) on the same tiny task and budget, its
+/// schedule and warm-up scaled to the budget.
+#[test]
+fn dqn_team_preset_learns_the_tiny_task_and_beats_random() {
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let mut cfg = tiny_config(Algo::Dqn, 1);
+    cfg.dqn = naosoccer_learn::dqn::DqnConfig::team();
+    cfg.steps = 40_000;
+    cfg.dqn.warmup = 500;
+    cfg.dqn.epsilon_decay = 20_000;
+    cfg.dqn.target_every = 500;
+    let dir = out_dir("dqn_team_tiny");
+    train(&cfg, &dir, &mut |_| {}).unwrap();
+    let (random, learned) = (random_return(&cfg), learned_return(&cfg, &dir));
+    eprintln!("tiny task, DQN team preset: random {random:.3}, learned {learned:.3}");
+    assert!(
+        learned > random * 1.25,
+        "DQN team {learned:.3} does not beat random {random:.3}"
+    );
+}
+
 /// Issue 13, cause 1: every self-play snapshot, not only the first, plays
 /// as the learner's team plays: a PPO snapshot samples (a greedy PPO team
 /// hardly ever shoots, so greedy snapshots made a toothless opponent), a
