@@ -139,10 +139,11 @@ pub struct RewardConfig {
     /// Ours, not the paper's: potential-based shaping by the ball's progress,
     /// per metre, for every robot of the team. The potential is the ball's x
     /// in the team's frame (metres toward the opponent goal) and the term is
-    /// `progress * (shaping_gamma * x' - x)` between two observed states, so
-    /// restarts count too (a ball kicked out over the opponent's goal line
-    /// and put back for their goal kick is charged the move back). It is
-    /// added outside the log compression; 0 (off) by default.
+    /// `progress * (shaping_gamma * x' - x)` between the state a tick starts
+    /// from and the state its physics reaches, before any restart: the
+    /// jump of a restart (the ball back to the centre after a goal) is
+    /// neither paid nor charged. It is added outside the log compression;
+    /// 0 (off) by default.
     pub progress: f32,
     /// Ours: potential-based shaping by each robot's own distance to the
     /// ball, per metre (potential `-distance`), added to that robot's reward

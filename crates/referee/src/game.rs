@@ -193,15 +193,11 @@ impl Match {
                 }
             }
         }
-        self.shaping = [0.0; ROBOTS];
-        self.run_rules(tick);
-        self.apply_commands(tick);
-        for e in &self.outcome.events {
-            apply_stats(&mut self.stats, e);
-        }
-        self.tick += 1;
-        // Shaping between the observed states before and after the tick,
-        // restarts included, so it telescopes over a match.
+        // Shaping between the state the tick started from and the state its
+        // physics reached, before any restart: a restart's jump (the ball
+        // back to the centre after a goal, out to a set-play spot) is
+        // neither paid nor charged, so a goal is not charged the progress
+        // it took to score it.
         let potential_after = self.potentials();
         let gamma = self.cfg.reward.shaping_gamma;
         for ((s, before), after) in self
@@ -210,8 +206,14 @@ impl Match {
             .zip(potential_before)
             .zip(potential_after)
         {
-            *s += gamma * after - before;
+            *s = gamma * after - before;
         }
+        self.run_rules(tick);
+        self.apply_commands(tick);
+        for e in &self.outcome.events {
+            apply_stats(&mut self.stats, e);
+        }
+        self.tick += 1;
         &self.outcome.events
     }
 
