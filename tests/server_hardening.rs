@@ -415,6 +415,10 @@ async fn tokens_are_team_bound_and_never_echoed_or_logged() {
         .with_writer(move || LogSink(sink.clone()))
         .finish();
     let _guard = tracing::subscriber::set_default(subscriber);
+    // Another test's thread, with no subscriber, may have cached the
+    // server's log call sites as never enabled before this one set its
+    // own; recompute, or the capture misses them under load (seen once).
+    tracing::callsite::rebuild_interest_cache();
 
     const GUESS: &str = "guessed-token-0123";
     let mut cfg = config(10);

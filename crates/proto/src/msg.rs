@@ -235,8 +235,13 @@ pub struct CreateMatch {
     pub token: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
-    /// Match length in minutes of game time.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Match length in minutes of game time (a finite number: a value that
+    /// overflows `f32`, such as `1e300`, is refused at decoding).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "finite_f32"
+    )]
     pub minutes: Option<f32>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mode: Option<Mode>,
@@ -561,6 +566,19 @@ impl From<ErrorMsg> for ServerMsg {
     }
 }
 
+/// An optional `f32` that must be finite: JSON numbers too large for `f32`
+/// parse to infinity, which would encode back as `null` (issue 15: the fuzz
+/// target's round trip).
+fn finite_f32<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f32>, D::Error> {
+    let v = Option::<f32>::deserialize(d)?;
+    match v {
+        Some(x) if !x.is_finite() => Err(serde::de::Error::custom(format!(
+            "expected a finite number, got {x}"
+        ))),
+        v => Ok(v),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -711,5 +729,24 @@ mod tests {
         fn next_up_compat(self) -> f32 {
             f32::from_bits(self.to_bits() + 1)
         }
+    }
+
+    /// Issue 15: a number too large for f32 parsed to infinity, which
+    /// encodes as null; it is refused at decoding now.
+    #[test]
+    fn issue_15_non_finite_minutes_are_refused() {
+        let bad = r#"{"type":"create_match","token":"a","minutes":200000000001576e204}"#;
+        let err = serde_json::from_str::<ClientMsg>(bad).unwrap_err();
+        assert!(err.to_string().contains("finite"), "{err}");
+        let ok: ClientMsg =
+            serde_json::from_str(r#"{"type":"create_match","token":"a","minutes":2.5}"#).unwrap();
+        let back: ClientMsg = serde_json::from_str(&serde_json::to_string(&ok).unwrap()).unwrap();
+        assert_eq!(ok, back);
+        let none: ClientMsg =
+            serde_json::from_str(r#"{"type":"create_match","token":"a"}"#).unwrap();
+        assert!(matches!(
+            none,
+            ClientMsg::CreateMatch(CreateMatch { minutes: None, .. })
+        ));
     }
 }
