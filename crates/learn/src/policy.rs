@@ -450,10 +450,20 @@ impl LearnedPolicy {
     ) {
         self.decide(obs, players, uniforms, out);
         if let ActMode::EpsilonGreedy { epsilon } = self.mode {
-            for (a, &u) in out.iter_mut().zip(uniforms) {
+            let masks = self.masks_shoot();
+            for (i, (a, &u)) in out.iter_mut().zip(uniforms).enumerate() {
                 if u < epsilon {
-                    // Given u < epsilon, u / epsilon is uniform on [0, 1).
-                    *a = ((u / epsilon * ACTIONS as f32) as usize).min(ACTIONS - 1);
+                    // Given u < epsilon, u / epsilon is uniform on [0, 1):
+                    // a uniform draw among the actions allowed, which
+                    // leaves out a masked `shoot` (ball out of reach).
+                    let masked = masks && obs[i * OBS_DIM + IN_REACH_FEATURE] <= 0.5;
+                    let allowed = if masked { ACTIONS - 1 } else { ACTIONS };
+                    let k = ((u / epsilon * allowed as f32) as usize).min(allowed - 1);
+                    *a = if masked && k >= crate::ppo::SHOOT {
+                        k + 1
+                    } else {
+                        k
+                    };
                 }
             }
         }

@@ -696,3 +696,51 @@ fn team_ppo_learns_to_score_on_an_empty_goal() {
 }
 
 const DRILL_STEPS: u64 = 800_000;
+
+/// `dqn-epsilon:` on the decision-level MDP: the random branch draws among
+/// the actions allowed, so it never picks a masked `shoot` (ball out of
+/// reach), and still can when the ball is in reach.
+#[test]
+fn epsilon_greedy_never_draws_a_masked_shoot() {
+    use naosoccer_learn::ActMode;
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let mut cfg = tiny_config(Algo::Dqn, 7);
+    cfg.dqn = naosoccer_learn::dqn::DqnConfig::team();
+    let mut p = LearnedPolicy::untrained(&cfg, "eps".into());
+    p.set_mode(ActMode::EpsilonGreedy { epsilon: 1.0 });
+    let n = 500;
+    let players: Vec<usize> = (0..n).map(|i| i % 4).collect();
+    let uniforms: Vec<f32> = (0..n).map(|i| (i as f32 + 0.5) / n as f32).collect();
+    let in_reach = 12; // `ball_in_reach` in layout version 2
+    let mut drawn = |reach: f32| {
+        let mut obs = vec![0.0f32; n * OBS_DIM];
+        for i in 0..n {
+            obs[i * OBS_DIM + in_reach] = reach;
+        }
+        let mut out = vec![0usize; n];
+        p.act_rows_keyed(&obs, &players, &uniforms, &mut out);
+        let mut counts = [0usize; 5];
+        for a in out {
+            counts[a] += 1;
+        }
+        counts
+    };
+    let out_of_reach = drawn(0.0);
+    assert_eq!(
+        out_of_reach[3], 0,
+        "a masked shoot was drawn: {out_of_reach:?}"
+    );
+    assert!(
+        out_of_reach
+            .iter()
+            .enumerate()
+            .all(|(a, &c)| a == 3 || c > 0),
+        "{out_of_reach:?}"
+    );
+    let in_reach_counts = drawn(1.0);
+    assert!(
+        in_reach_counts.iter().all(|&c| c > 0),
+        "{in_reach_counts:?}"
+    );
+}
