@@ -1018,6 +1018,91 @@ struct OpenDecision {
     discount: f32,
 }
 
+/// What both DQN loops keep between vectorised steps: the counters, the
+/// loss since the last metrics row and the rows written.
+#[derive(Default)]
+struct DqnLog {
+    transitions: u64,
+    update: u64,
+    step: usize,
+    loss_sum: f64,
+    loss_n: u32,
+    rows: Vec<MetricsRow>,
+}
+
+impl DqnLog {
+    fn add_loss(&mut self, loss: Option<f64>) {
+        if let Some(l) = loss {
+            self.loss_sum += l;
+            self.loss_n += 1;
+        }
+    }
+
+    /// After a vectorised step of `rows` transitions: a metrics row every
+    /// `log_every` steps (and at the end), checkpoints and self-play
+    /// snapshots when they fall due.
+    #[allow(clippy::too_many_arguments)]
+    fn end_step(
+        &mut self,
+        cfg: &TrainConfig,
+        out: &Path,
+        rows: usize,
+        env: &mut VecEnv,
+        tally: &mut Tally,
+        run: &mut RunDir,
+        progress: &mut dyn FnMut(&Progress<'_>),
+        dqn: &Dqn,
+    ) -> Result<(), LearnError> {
+        let before = self.transitions;
+        self.transitions += rows as u64;
+        self.step += 1;
+        if self.step.is_multiple_of(cfg.log_every.max(1)) || self.transitions >= cfg.steps {
+            self.update += 1;
+            let loss = if self.loss_n > 0 {
+                self.loss_sum / f64::from(self.loss_n)
+            } else {
+                f64::NAN
+            };
+            let row = tally.row(
+                self.update,
+                env.ticks() / cfg.matches as u64,
+                self.transitions,
+                (loss, f64::NAN, f64::NAN),
+            );
+            self.loss_sum = 0.0;
+            self.loss_n = 0;
+            run.write_row(&row)?;
+            progress(&Progress {
+                row: &row,
+                total_steps: cfg.steps,
+            });
+            self.rows.push(row);
+        }
+        let stores: Vec<&tch::nn::VarStore> = dqn.nets.iter().map(|n| &n.vs).collect();
+        if checkpoint_due(before, self.transitions, cfg.checkpoint_every) {
+            let name = format!("checkpoints/step-{}.safetensors", self.transitions);
+            save_stores(&stores, &out.join(name))?;
+        }
+        if snapshot_due(cfg, before, self.transitions) {
+            let snap = self_play_snapshot(cfg, Some(&stores))?;
+            env.set_opponent(Opponent::Net(Box::new(snap)));
+        }
+        Ok(())
+    }
+
+    /// Saves the final weights and sums the run up.
+    fn finish(self, out: &Path, dqn: &Dqn) -> Result<TrainSummary, LearnError> {
+        let final_weights = out.join("final.safetensors");
+        let stores: Vec<&tch::nn::VarStore> = dqn.nets.iter().map(|n| &n.vs).collect();
+        save_stores(&stores, &final_weights)?;
+        Ok(TrainSummary {
+            rows: self.rows,
+            transitions: self.transitions,
+            final_weights,
+        })
+    }
+}
+
 /// DQN on the decision-level MDP: each tick, the robots free to act whose
 /// last decision ran out decide (epsilon-greedy over the actions allowed
 /// them); a decision closes when the robot next decides, or when the
@@ -1049,10 +1134,8 @@ fn train_dqn_decisions(
     let mut q = Vec::new();
     let mut nstep = NStep::new(cfg.dqn.n_step, rows);
     let gamma = cfg.dqn.discount(1);
-    let (mut transitions, mut update, mut step) = (0u64, 0u64, 0usize);
-    let (mut loss_sum, mut loss_n) = (0.0, 0u32);
-    let mut out_rows = Vec::new();
-    while transitions < cfg.steps {
+    let mut log = DqnLog::default();
+    while log.transitions < cfg.steps {
         let mut any = false;
         for r in 0..rows {
             let o = env.learner_observation(r);
@@ -1066,7 +1149,7 @@ fn train_dqn_decisions(
         if any {
             let obs = env.observations();
             dqn.q_values(obs, robots, &mut q);
-            let epsilon = cfg.dqn.epsilon_at(transitions);
+            let epsilon = cfg.dqn.epsilon_at(log.transitions);
             for r in (0..rows).filter(|&r| deciding[r]) {
                 let row = &obs[r * OBS_DIM..(r + 1) * OBS_DIM];
                 // The decision that ran until now ends in this state.
@@ -1125,56 +1208,13 @@ fn train_dqn_decisions(
         tally.add_rewards(env.rewards());
         tally.episodes.extend(finished);
         if any {
-            if let Some(l) = dqn.learn(&mut rng) {
-                loss_sum += l;
-                loss_n += 1;
-            }
+            log.add_loss(dqn.learn(&mut rng));
         }
-        let before = transitions;
-        transitions += rows as u64;
-        step += 1;
-        if step.is_multiple_of(cfg.log_every.max(1)) || transitions >= cfg.steps {
-            update += 1;
-            let loss = if loss_n > 0 {
-                loss_sum / f64::from(loss_n)
-            } else {
-                f64::NAN
-            };
-            let row = tally.row(
-                update,
-                env.ticks() / cfg.matches as u64,
-                transitions,
-                (loss, f64::NAN, f64::NAN),
-            );
-            loss_sum = 0.0;
-            loss_n = 0;
-            run.write_row(&row)?;
-            progress(&Progress {
-                row: &row,
-                total_steps: cfg.steps,
-            });
-            out_rows.push(row);
-        }
-        let stores: Vec<&tch::nn::VarStore> = dqn.nets.iter().map(|n| &n.vs).collect();
-        if checkpoint_due(before, transitions, cfg.checkpoint_every) {
-            save_stores(
-                &stores,
-                &out.join(format!("checkpoints/step-{transitions}.safetensors")),
-            )?;
-        }
-        if snapshot_due(cfg, before, transitions) {
-            let snap = self_play_snapshot(cfg, Some(&stores))?;
-            env.set_opponent(Opponent::Net(Box::new(snap)));
-        }
+        log.end_step(
+            cfg, out, rows, &mut env, &mut tally, &mut run, progress, &dqn,
+        )?;
     }
-    let final_weights = out.join("final.safetensors");
-    let stores: Vec<&tch::nn::VarStore> = dqn.nets.iter().map(|n| &n.vs).collect();
-    save_stores(&stores, &final_weights)?;
-    Ok(TrainSummary {
-        rows: out_rows,
-        transitions,
-        final_weights,
-    })
+    log.finish(out, &dqn)
 }
 
 fn train_dqn(
@@ -1194,17 +1234,13 @@ fn train_dqn(
     let mut tally = Tally::new(robots);
     let mut actions = vec![0usize; rows];
     let mut prev = vec![0.0f32; rows * OBS_DIM];
-    let mut transitions = 0u64;
-    let mut update = 0u64;
-    let (mut loss_sum, mut loss_n) = (0.0, 0u32);
-    let mut out_rows = Vec::new();
-    let mut step = 0usize;
+    let mut log = DqnLog::default();
     let mut nstep = NStep::new(cfg.dqn.n_step, rows);
     // Every transition here lasts one control tick.
     let discount = cfg.dqn.discount(1);
-    while transitions < cfg.steps {
+    while log.transitions < cfg.steps {
         prev.copy_from_slice(env.observations());
-        let epsilon = cfg.dqn.epsilon_at(transitions);
+        let epsilon = cfg.dqn.epsilon_at(log.transitions);
         dqn.act(&prev, robots, epsilon, &mut rng, &mut actions);
         let finished = env.step(&actions)?;
         let next = env.observations();
@@ -1232,53 +1268,10 @@ fn train_dqn(
         }
         tally.add_rewards(env.rewards());
         tally.episodes.extend(finished);
-        if let Some(l) = dqn.learn(&mut rng) {
-            loss_sum += l;
-            loss_n += 1;
-        }
-        let before = transitions;
-        transitions += rows as u64;
-        step += 1;
-        if step.is_multiple_of(cfg.log_every.max(1)) || transitions >= cfg.steps {
-            update += 1;
-            let loss = if loss_n > 0 {
-                loss_sum / f64::from(loss_n)
-            } else {
-                f64::NAN
-            };
-            let row = tally.row(
-                update,
-                env.ticks() / cfg.matches as u64,
-                transitions,
-                (loss, f64::NAN, f64::NAN),
-            );
-            loss_sum = 0.0;
-            loss_n = 0;
-            run.write_row(&row)?;
-            progress(&Progress {
-                row: &row,
-                total_steps: cfg.steps,
-            });
-            out_rows.push(row);
-        }
-        let stores: Vec<&tch::nn::VarStore> = dqn.nets.iter().map(|n| &n.vs).collect();
-        if checkpoint_due(before, transitions, cfg.checkpoint_every) {
-            save_stores(
-                &stores,
-                &out.join(format!("checkpoints/step-{transitions}.safetensors")),
-            )?;
-        }
-        if snapshot_due(cfg, before, transitions) {
-            let snap = self_play_snapshot(cfg, Some(&stores))?;
-            env.set_opponent(Opponent::Net(Box::new(snap)));
-        }
+        log.add_loss(dqn.learn(&mut rng));
+        log.end_step(
+            cfg, out, rows, &mut env, &mut tally, &mut run, progress, &dqn,
+        )?;
     }
-    let final_weights = out.join("final.safetensors");
-    let stores: Vec<&tch::nn::VarStore> = dqn.nets.iter().map(|n| &n.vs).collect();
-    save_stores(&stores, &final_weights)?;
-    Ok(TrainSummary {
-        rows: out_rows,
-        transitions,
-        final_weights,
-    })
+    log.finish(out, &dqn)
 }
