@@ -269,7 +269,11 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     // Matches end together, so most rows have no finished episode: show the
     // latest episodes that did finish.
     let mut last_episodes = "no episode finished yet".to_string();
+    // The rate counts this process's transitions only: a resumed run starts
+    // from its checkpoint's count (taken from its first report).
+    let mut first_seen: Option<u64> = a.resume.is_none().then_some(0);
     let mut show = |p: &naosoccer_learn::train::Progress<'_>| {
+        let since = p.row.transitions - *first_seen.get_or_insert(p.row.transitions);
         if !p.row.episode_return.is_nan() {
             last_episodes = format!(
                 "last episodes: return {:.2}, goals {:.2}:{:.2} ({} so far)",
@@ -290,7 +294,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
             " ".repeat(24 - filled.min(24)),
             100.0 * frac.min(1.0),
             p.row.transitions,
-            p.row.transitions as f64 / secs.max(1e-9),
+            since as f64 / secs.max(1e-9),
             p.row.reward,
             last_episodes,
         );
@@ -310,12 +314,14 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         eprintln!();
     }
     let secs = start.elapsed().as_secs_f64();
+    // A resumed run: the rate of this sitting's transitions.
+    let here = summary.transitions - first_seen.unwrap_or(summary.transitions);
     println!(
         "trained {} for {} transitions in {:.1} s ({:.0} transitions/s); weights: {}",
         algo,
         summary.transitions,
         secs,
-        summary.transitions as f64 / secs,
+        here as f64 / secs,
         summary.final_weights.display()
     );
     Ok(())
