@@ -1,0 +1,98 @@
+//! Probes a trained team on the states it meets in play: it plays matches as
+//! blue against an opponent and, at every tick a robot of it decides (free,
+//! standing), sorts the situation into a few kinds and sums the action the
+//! robot took. Unlike `probe` (states built by hand) nothing here is off the
+//! team's own state distribution.
+//!
+//! `cargo run --release -p naosoccer-learn --example probe_play -- ppo:DIR [OPPONENT] [MATCHES]`
+
+use naosoccer_client::policy::{Policy, PolicyKind};
+use naosoccer_learn::obs::ball_in_robot_frame;
+use naosoccer_learn::policy::is_free;
+use naosoccer_learn::LearnedPolicy;
+use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_referee::{Match, MatchConfig};
+
+const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
+const KINDS: [&str; 7] = [
+    "ball in kick reach, facing the opponent half",
+    "ball in kick reach, facing the own half",
+    "ball within 1 m, ahead (+-20 deg), out of reach",
+    "ball ahead (+-20 deg), farther than 1 m",
+    "ball to the left (20-135 deg)",
+    "ball to the right (20-135 deg)",
+    "ball behind (>135 deg)",
+];
+
+fn kind(o: &Observation, in_reach: bool) -> usize {
+    let me = o.me();
+    let (ahead, side) = ball_in_robot_frame(o);
+    let bearing = side.atan2(ahead).to_degrees();
+    let d = ahead.hypot(side);
+    if in_reach {
+        return if me.heading.cos() >= 0.0 { 0 } else { 1 };
+    }
+    if bearing.abs() <= 20.0 {
+        if d <= 1.0 {
+            2
+        } else {
+            3
+        }
+    } else if bearing.abs() > 135.0 {
+        6
+    } else if bearing > 0.0 {
+        4
+    } else {
+        5
+    }
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let spec = args
+        .next()
+        .expect("usage: probe_play ppo:DIR [OPPONENT] [MATCHES]");
+    let opponent = args.next().unwrap_or_else(|| "scripted".into());
+    let matches: u64 = args.next().map_or(4, |m| m.parse().expect("MATCHES"));
+    let opp: PolicyKind = opponent.parse().expect("a built-in opponent");
+    let mut team = LearnedPolicy::load(&spec).expect("load the policy");
+    let scale = team.scale();
+    let cfg = MatchConfig::default();
+    let mut counts = [[0u64; NAMES.len()]; KINDS.len()];
+    for seed in 0..matches {
+        let mut m = Match::new(&cfg, 1_000_000 + seed).expect("a match");
+        team.set_match_seed(m.seed());
+        let mut reds: Vec<Box<dyn Policy>> = (PLAYERS_PER_TEAM..ROBOTS)
+            .map(|i| opp.build(m.seed(), RobotId::from_index(i).unwrap()))
+            .collect();
+        while !m.is_finished() {
+            let blue: Vec<Observation> = (0..PLAYERS_PER_TEAM)
+                .map(|p| m.observe(Team::Blue, p))
+                .collect();
+            let mut acts = [Action::Stay; ROBOTS];
+            team.act_batch(&blue, &mut acts[..PLAYERS_PER_TEAM]);
+            for (p, o) in blue.iter().enumerate() {
+                // Free robots only: a lying or kicking robot's action does
+                // nothing. A movement held for a few ticks counts each tick.
+                if is_free(o) {
+                    counts[kind(o, scale.kick.in_reach(o))][acts[p].index()] += 1;
+                }
+            }
+            for (i, red) in reds.iter_mut().enumerate() {
+                let o = m.observe(Team::Red, i);
+                acts[PLAYERS_PER_TEAM + i] = red.act(&o);
+            }
+            m.step(&acts);
+        }
+    }
+    println!("{spec} as blue against {opponent}, {matches} matches: actions taken by free robots");
+    for (k, row) in counts.iter().enumerate() {
+        let n: u64 = row.iter().sum();
+        let shares: Vec<String> = row
+            .iter()
+            .zip(NAMES)
+            .map(|(c, name)| format!("{name} {:.2}", *c as f64 / n.max(1) as f64))
+            .collect();
+        println!("  {} ({n} ticks): {}", KINDS[k], shares.join(", "));
+    }
+}
