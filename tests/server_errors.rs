@@ -133,17 +133,20 @@ async fn malformed_json_and_unknown_types_keep_the_connection() {
     let mut c = Client::connect(server.addr().as_str(), "sloppy")
         .await
         .unwrap();
-    for bad in [
-        &b"{\"type\": \"ping\","[..],
-        b"[1,2,3]",
-        b"{\"nonce\": 3}",
-        b"\xff\xfe",
-        b"{\"type\":\"join\",\"team\":\"green\"}",
+    // The error names the request's type when the frame is a JSON object
+    // with a string `type` (issue 15).
+    for (bad, in_reply_to) in [
+        (&b"{\"type\": \"ping\","[..], None),
+        (b"[1,2,3]", None),
+        (b"{\"nonce\": 3}", None),
+        (b"\xff\xfe", None),
+        (b"{\"type\":\"join\",\"team\":\"green\"}", Some("join")),
     ] {
         let mut f = (bad.len() as u32).to_be_bytes().to_vec();
         f.extend_from_slice(bad);
         c.send_raw(&f).await.unwrap();
-        expect_error(&mut c, ErrorCode::InvalidArgument, false).await;
+        let e = expect_error(&mut c, ErrorCode::InvalidArgument, false).await;
+        assert_eq!(e.in_reply_to.as_deref(), in_reply_to, "{e:?}");
     }
     c.send_raw(&frame::encode(&serde_json::json!({"type": "teleport", "x": 1})).unwrap())
         .await
@@ -312,5 +315,170 @@ async fn silent_connection_is_closed_after_the_hello_timeout() {
         ),
         "{msg:?}"
     );
+    server.stop().await;
+}
+
+/// What a client that pairs replies as docs/PROTOCOL.md section 2 says sees:
+/// observations, `match_end` and errors with `"in_reply_to": "action"` are
+/// pushes; anything else answers the oldest request still waiting, and an
+/// error names that request's `type`. Each message is described in a word
+/// or two so a whole conversation compares at once.
+fn pair(waiting: &mut std::collections::VecDeque<&'static str>, msg: &ServerMsg) -> String {
+    let push = match msg {
+        ServerMsg::Observation(o) => return format!("push observation {}", o.tick),
+        ServerMsg::MatchEnd(_) => return "push match_end".into(),
+        ServerMsg::Error(e) => e.in_reply_to.as_deref() == Some("action"),
+        _ => false,
+    };
+    if push {
+        let ServerMsg::Error(e) = msg else {
+            unreachable!()
+        };
+        return format!("push action error {} tick {:?}", e.code, e.tick);
+    }
+    let Some(request) = waiting.pop_front() else {
+        panic!("a reply with no request waiting: {msg:?}");
+    };
+    match msg {
+        ServerMsg::Error(e) => {
+            assert_eq!(
+                e.in_reply_to.as_deref(),
+                Some(request),
+                "an error answering {request} must say so: {e:?}"
+            );
+            format!("{request}: {}", e.code)
+        }
+        ServerMsg::Pong(p) => format!("{request}: pong {}", p.nonce),
+        other => format!("{request}: {other:?}"),
+    }
+}
+
+fn raw(json: &str) -> Vec<u8> {
+    let mut f = (json.len() as u32).to_be_bytes().to_vec();
+    f.extend_from_slice(json.as_bytes());
+    f
+}
+
+/// Issue 15 A.1: a request whose `type` is known but a field fails to decode
+/// is answered with an error that names its type (and an action's tick), so
+/// a bad action followed by a `ping` gets the error and then the `pong`,
+/// each pairable; in the lobby and in a running match alike.
+#[tokio::test]
+async fn errors_for_undecodable_fields_are_pairable() {
+    let mut cfg = config(100);
+    cfg.start_players = 1;
+    // No tick passes on its own while the test talks: the match waits.
+    cfg.deadline_ms = 600_000;
+    let server = start(cfg).await;
+
+    // In the lobby: a bad action is a push, the ping's pong the reply.
+    let mut lobby = Client::connect(server.addr().as_str(), "lobby")
+        .await
+        .unwrap();
+    let mut bytes = raw(r#"{"type":"action","tick":5,"actions":[{"player":0,"action":"dance"}]}"#);
+    bytes.extend(raw(r#"{"type":"ping","nonce":8}"#));
+    lobby.send_raw(&bytes).await.unwrap();
+    let mut waiting = std::collections::VecDeque::from(["ping"]);
+    let mut seen = Vec::new();
+    for _ in 0..2 {
+        seen.push(pair(&mut waiting, &lobby.recv().await.unwrap()));
+    }
+    assert_eq!(
+        seen,
+        [
+            "push action error invalid_argument tick Some(5)",
+            "ping: pong 8"
+        ]
+    );
+
+    // In a match, waiting on this client's action for tick 0.
+    let mut c = Client::connect(server.addr().as_str(), "pairing")
+        .await
+        .unwrap();
+    c.join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
+        .await
+        .unwrap();
+    assert!(matches!(c.recv().await.unwrap(), ServerMsg::Observation(o) if o.tick == 0));
+    // (frame, the request type it makes, if it is a request)
+    let frames: [(&str, Option<&'static str>); 11] = [
+        (
+            r#"{"type":"action","tick":0,"actions":[{"player":0,"action":"dance"}]}"#,
+            None,
+        ),
+        (r#"{"type":"ping","nonce":1}"#, Some("ping")),
+        (
+            r#"{"type":"action","tick":0,"actions":[{"player":9,"action":"stay"}]}"#,
+            None,
+        ),
+        (r#"{"type":"ping","nonce":2}"#, Some("ping")),
+        (
+            r#"{"type":"action","tick":0,"team":"green","actions":[]}"#,
+            None,
+        ),
+        (
+            r#"{"type":"create_match","token":"admin-secret","mode":"fast"}"#,
+            Some("create_match"),
+        ),
+        (r#"{"type":"ping","nonce":"17"}"#, Some("ping")),
+        (
+            r#"{"type":"join","match_id":1,"team":"green","token":"x","players":[1]}"#,
+            Some("join"),
+        ),
+        (r#"{"type":"action","tick":"zero","actions":[]}"#, None),
+        (r#"[1,2,3]"#, Some("(not an object)")),
+        (r#"{"type":"ping","nonce":3}"#, Some("ping")),
+    ];
+    let mut bytes = Vec::new();
+    let mut waiting = std::collections::VecDeque::new();
+    for (json, request) in frames {
+        bytes.extend(raw(json));
+        waiting.extend(request);
+    }
+    c.send_raw(&bytes).await.unwrap();
+    let mut seen = Vec::new();
+    for _ in 0..frames.len() {
+        let msg = c.recv().await.unwrap();
+        // An error for a frame that is not an object cannot name a type: it
+        // answers in order (the pairing rule still holds).
+        if waiting.front() == Some(&"(not an object)") {
+            if let ServerMsg::Error(e) = &msg {
+                if e.in_reply_to.is_none() {
+                    waiting.pop_front();
+                    seen.push(format!("(not an object): {}", e.code));
+                    continue;
+                }
+            }
+        }
+        seen.push(pair(&mut waiting, &msg));
+    }
+    assert_eq!(
+        seen,
+        [
+            "push action error invalid_argument tick Some(0)",
+            "ping: pong 1",
+            "push action error invalid_argument tick Some(0)",
+            "ping: pong 2",
+            "push action error invalid_argument tick Some(0)",
+            "create_match: invalid_argument",
+            "ping: invalid_argument",
+            "join: invalid_argument",
+            "push action error invalid_argument tick None",
+            "(not an object): invalid_argument",
+            "ping: pong 3",
+        ]
+    );
+    assert!(waiting.is_empty());
+    // The match still waits on this robot, and plays on once it answers.
+    c.send_actions(
+        0,
+        &[PlayerAction {
+            player: p(0),
+            action: Action::Stay,
+        }],
+    )
+    .await
+    .unwrap();
+    assert!(matches!(c.recv().await.unwrap(), ServerMsg::Observation(o) if o.tick == 1));
+    assert_eq!(c.ping(4).await.unwrap(), 4);
     server.stop().await;
 }

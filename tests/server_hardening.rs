@@ -157,6 +157,11 @@ async fn message_rate_is_limited_by_a_token_bucket() {
     assert_eq!(e.code(), Some(ErrorCode::ResourceExhausted), "{e}");
     let ClientError::Server(e) = e else { panic!() };
     assert!(!e.fatal && e.message.contains("messages_per_second"), "{e}");
+    assert_eq!(
+        e.in_reply_to.as_deref(),
+        Some("ping"),
+        "pairable (issue 15)"
+    );
     let mut flood = Vec::new();
     for nonce in 0..5 {
         let msg = ClientMsg::Ping(naosoccer_proto::msg::Ping { nonce });
@@ -164,9 +169,11 @@ async fn message_rate_is_limited_by_a_token_bucket() {
     }
     c.send_raw(&flood).await.unwrap();
     for _ in 0..4 {
-        expect_error(&mut c, ErrorCode::ResourceExhausted, false).await;
+        let e = expect_error(&mut c, ErrorCode::ResourceExhausted, false).await;
+        assert_eq!(e.in_reply_to.as_deref(), Some("ping"));
     }
-    expect_error(&mut c, ErrorCode::ResourceExhausted, true).await;
+    let e = expect_error(&mut c, ErrorCode::ResourceExhausted, true).await;
+    assert_eq!(e.in_reply_to.as_deref(), Some("ping"));
     expect_closed(&mut c).await;
     let mut other = Client::connect(server.addr(), "neighbour").await.unwrap();
     assert_eq!(other.ping(1).await.unwrap(), 1);

@@ -192,6 +192,26 @@ pub enum ClientMsg {
 }
 
 impl ClientMsg {
+    /// The wire names of the known `type`s.
+    pub const KINDS: [&'static str; 7] = [
+        "hello",
+        "create_match",
+        "list_matches",
+        "join",
+        "action",
+        "leave",
+        "ping",
+    ];
+
+    /// Decodes one frame's payload. On failure, the error keeps what could
+    /// be read of the frame (its `type`, an action's `tick`) for the reply.
+    pub fn decode(payload: &[u8]) -> Result<ClientMsg, Undecodable> {
+        serde_json::from_slice(payload).map_err(|error| Undecodable {
+            head: FrameHead::peek(payload),
+            error,
+        })
+    }
+
     /// The wire name of this message's `type`.
     pub fn kind(&self) -> &'static str {
         match self {
@@ -204,6 +224,71 @@ impl ClientMsg {
             ClientMsg::Ping(_) => "ping",
             ClientMsg::Unknown => "unknown",
         }
+    }
+}
+
+/// What a server can read of a client frame besides its full decoding: the
+/// `type` (as [`ClientMsg::kind`] names it) and, for an action, its `tick`.
+/// An error answering the frame carries both (`in_reply_to`, `tick`), so the
+/// client can pair it even when a field failed to decode (issue 15).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FrameHead {
+    /// `None` when the payload is not a JSON object with a string `type`;
+    /// `"unknown"` for a type this build does not know.
+    pub kind: Option<&'static str>,
+    /// The `tick` of an `action`, when it holds a valid tick number.
+    pub tick: Option<u64>,
+}
+
+impl FrameHead {
+    /// Reads the head of a payload leniently: other fields may be missing
+    /// or ill-typed. For error paths only (it builds a JSON tree).
+    pub fn peek(payload: &[u8]) -> FrameHead {
+        let Ok(serde_json::Value::Object(map)) = serde_json::from_slice(payload) else {
+            return FrameHead::default();
+        };
+        let Some(kind) = map.get("type").and_then(|t| t.as_str()) else {
+            return FrameHead::default();
+        };
+        let kind = ClientMsg::KINDS
+            .iter()
+            .copied()
+            .find(|k| *k == kind)
+            .unwrap_or("unknown");
+        let tick = (kind == "action")
+            .then(|| map.get("tick").and_then(|t| t.as_u64()))
+            .flatten();
+        FrameHead {
+            kind: Some(kind),
+            tick,
+        }
+    }
+
+    /// An error answering this frame: `in_reply_to` and `tick` as read.
+    pub fn error(self, code: ErrorCode, message: impl Into<String>) -> ErrorMsg {
+        ErrorMsg {
+            in_reply_to: self.kind.map(str::to_owned),
+            tick: self.tick,
+            ..ErrorMsg::new(code, message)
+        }
+    }
+}
+
+/// A client frame that did not decode as a [`ClientMsg`].
+#[derive(Debug)]
+pub struct Undecodable {
+    /// What could be read of it.
+    pub head: FrameHead,
+    pub error: serde_json::Error,
+}
+
+impl Undecodable {
+    /// The `invalid_argument` error answering the frame.
+    pub fn to_error(&self) -> ErrorMsg {
+        self.head.error(
+            ErrorCode::InvalidArgument,
+            format!("not a valid message: {}", self.error),
+        )
     }
 }
 
@@ -728,6 +813,93 @@ mod tests {
     impl NextUp for f32 {
         fn next_up_compat(self) -> f32 {
             f32::from_bits(self.to_bits() + 1)
+        }
+    }
+
+    /// Issue 15 A.1: a frame whose `type` could be read keeps it, and an
+    /// action its tick, when another field fails to decode.
+    #[test]
+    fn issue_15_undecodable_frames_keep_their_type_and_tick() {
+        let cases = [
+            (
+                r#"{"type":"action","tick":4,"actions":[{"player":0,"action":"dance"}]}"#,
+                Some("action"),
+                Some(4),
+            ),
+            (
+                r#"{"type":"action","tick":4,"actions":[{"player":9,"action":"stay"}]}"#,
+                Some("action"),
+                Some(4),
+            ),
+            (
+                r#"{"type":"action","tick":4,"team":"green","actions":[]}"#,
+                Some("action"),
+                Some(4),
+            ),
+            (
+                r#"{"type":"action","tick":-1,"actions":[]}"#,
+                Some("action"),
+                None,
+            ),
+            (
+                r#"{"type":"action","tick":"4","actions":[]}"#,
+                Some("action"),
+                None,
+            ),
+            (r#"{"type":"action","actions":[]}"#, Some("action"), None),
+            (
+                r#"{"type":"create_match","token":"a","mode":"fast"}"#,
+                Some("create_match"),
+                None,
+            ),
+            (
+                r#"{"type":"join","team":"green","token":"t","players":[0]}"#,
+                Some("join"),
+                None,
+            ),
+            (r#"{"type":"ping","nonce":"17"}"#, Some("ping"), None),
+            (r#"{"type":"hello"}"#, Some("hello"), None),
+            (r#"{"type":"leave","tick":3,"x":[}"#, None, None),
+            (r#"[1,2]"#, None, None),
+            (r#""ping""#, None, None),
+            (r#"{"nonce":3}"#, None, None),
+            (r#"{"type":"ping","#, None, None),
+        ];
+        for (payload, kind, tick) in cases {
+            let e = ClientMsg::decode(payload.as_bytes())
+                .unwrap_err()
+                .to_error();
+            assert_eq!(e.code, ErrorCode::InvalidArgument, "{payload}");
+            assert!(!e.fatal, "{payload}");
+            assert_eq!(e.in_reply_to.as_deref(), kind, "{payload}");
+            assert_eq!(e.tick, tick, "{payload}");
+        }
+        // A frame refused before decoding (over the rate) is read the same way.
+        let head = FrameHead::peek(br#"{"type":"teleport","tick":2}"#);
+        assert_eq!((head.kind, head.tick), (Some("unknown"), None));
+        for msg in [
+            ClientMsg::ListMatches(ListMatches {}),
+            ClientMsg::Leave(Leave {}),
+            ClientMsg::Ping(Ping { nonce: 3 }),
+            ClientMsg::CreateMatch(CreateMatch::default()),
+            ClientMsg::Hello(Hello::new("x")),
+            ClientMsg::Action(ActionMsg {
+                tick: 9,
+                team: None,
+                actions: vec![],
+            }),
+            ClientMsg::Join(Join {
+                match_id: None,
+                team: Team::Red,
+                token: "t".into(),
+                players: vec![],
+            }),
+        ] {
+            let bytes = serde_json::to_vec(&msg).unwrap();
+            let head = FrameHead::peek(&bytes);
+            assert_eq!(head.kind, Some(msg.kind()));
+            assert!(ClientMsg::KINDS.contains(&msg.kind()));
+            assert_eq!(head.tick, matches!(msg, ClientMsg::Action(_)).then_some(9));
         }
     }
 

@@ -10,8 +10,9 @@ use crate::server::Shared;
 use naosoccer_client::framed::{FrameReader, FrameWriter, WireError};
 use naosoccer_proto::frame::FrameError;
 use naosoccer_proto::msg::{
-    ActionMsg, ClientMsg, ErrorCode, ErrorMsg, Hello, Join, Left, MatchCreated, MatchId, MatchList,
-    ObservationRef, Player, Pong, ServerMsg, Welcome, PROTOCOL_NAME, PROTOCOL_VERSION,
+    ActionMsg, ClientMsg, ErrorCode, ErrorMsg, FrameHead, Hello, Join, Left, MatchCreated, MatchId,
+    MatchList, ObservationRef, Player, Pong, ServerMsg, Undecodable, Welcome, PROTOCOL_NAME,
+    PROTOCOL_VERSION,
 };
 use naosoccer_proto::{Action, Team, PLAYERS_PER_TEAM};
 use std::net::SocketAddr;
@@ -248,16 +249,19 @@ impl Conn {
                     match self.bucket.admit() {
                         Admit::Yes => {}
                         Admit::Refuse => {
+                            // Answered like any frame: pairable by its type.
                             let m = format!("over {} messages per second (messages_per_second); message dropped", limits.messages_per_second);
-                            self.send(&ServerMsg::Error(ErrorMsg::new(ErrorCode::ResourceExhausted, m))).await?;
+                            let e = FrameHead::peek(frame).error(ErrorCode::ResourceExhausted, m);
+                            self.send(&ServerMsg::Error(e)).await?;
                             continue;
                         }
                         Admit::Disconnect => {
                             let m = format!("kept sending over {} messages per second while refused; closing the connection", limits.messages_per_second);
-                            return self.fatal(ErrorCode::ResourceExhausted, m).await;
+                            let e = FrameHead::peek(frame).error(ErrorCode::ResourceExhausted, m).fatal();
+                            return self.send(&ServerMsg::Error(e)).await;
                         }
                     }
-                    let msg = serde_json::from_slice::<ClientMsg>(frame);
+                    let msg = ClientMsg::decode(frame);
                     if let Flow::Close = self.request(msg).await? {
                         return Ok(());
                     }
@@ -326,19 +330,12 @@ impl Conn {
         Ok(if close { Flow::Close } else { Flow::Continue })
     }
 
-    async fn request(
-        &mut self,
-        msg: Result<ClientMsg, serde_json::Error>,
-    ) -> Result<Flow, WireError> {
+    async fn request(&mut self, msg: Result<ClientMsg, Undecodable>) -> Result<Flow, WireError> {
         let msg = match msg {
             Ok(m) => m,
-            Err(e) => {
-                let err = ErrorMsg::new(
-                    ErrorCode::InvalidArgument,
-                    format!("not a valid message: {e}"),
-                );
-                return self.reply(err.into()).await;
-            }
+            // Carries the frame's type and an action's tick when they could
+            // be read, so the client can pair it (docs/PROTOCOL.md section 3).
+            Err(e) => return self.reply(e.to_error().into()).await,
         };
         let kind = msg.kind();
         if !self.greeted && !matches!(msg, ClientMsg::Hello(_)) {
