@@ -410,6 +410,75 @@ async fn reconnecting_robot_client_takes_its_robot_back() {
     server.stop().await;
 }
 
+/// Issue 15 A.5, the ordering behind the flaky test above made certain: a
+/// robot's client answers tick 0 and disconnects while the tick still waits
+/// on the keeper, and the robot is taken back before the keeper answers. Its
+/// action for tick 0 stands, so the new connection is not sent tick 0 again
+/// (a tick its robot has answered) but tick 1 once the keeper answers, and
+/// the robot has no miss.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn rejoining_robot_is_not_sent_a_tick_it_already_answered() {
+    let mut cfg = config(20);
+    cfg.start_players = 2;
+    cfg.deadline_ms = 600_000;
+    let server = start(cfg).await;
+    let mut keeper = Client::connect(server.addr(), "keeper").await.unwrap();
+    keeper
+        .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(1)])
+        .await
+        .unwrap();
+    let mut first = Client::connect(server.addr(), "robot-0").await.unwrap();
+    first
+        .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
+        .await
+        .unwrap();
+    for c in [&mut keeper, &mut first] {
+        assert!(matches!(c.next_push().await.unwrap(), Push::Observation(o) if o.tick == 0));
+    }
+    // The connection forwards the action to the match before it reads the
+    // end of the stream, so the match has it before it hears of the leave.
+    first.send_actions(0, &stay(&[p(0)])).await.unwrap();
+    drop(first);
+    let mut again = Client::connect(server.addr(), "robot-0 again")
+        .await
+        .unwrap();
+    let mut freed = false;
+    for _ in 0..10_000 {
+        if !match_info(&mut again, MatchId(1)).await.taken.blue[0] {
+            freed = true;
+            break;
+        }
+    }
+    assert!(freed, "the disconnected client's slot never became free");
+    let joined = again
+        .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
+        .await
+        .unwrap();
+    assert_eq!(
+        match_info(&mut again, MatchId(1)).await.tick,
+        0,
+        "tick 0 still waits on the keeper"
+    );
+    keeper.send_actions(0, &stay(&[p(1)])).await.unwrap();
+    match again.next_push().await.unwrap() {
+        Push::Observation(o) => assert_eq!(o.tick, 1, "its robot had answered tick 0"),
+        other => panic!("{other:?}"),
+    }
+    again.send_actions(1, &stay(&[p(0)])).await.unwrap();
+    let k = tokio::spawn(async move { play_out(&mut keeper, &[p(1)]).await });
+    let (end, errors) = play_out(&mut again, &joined.players).await;
+    let (kend, kerrors) = k.await.unwrap();
+    assert!(
+        errors.is_empty() && kerrors.is_empty(),
+        "{errors:?} {kerrors:?}"
+    );
+    assert_eq!(end.reason, EndReason::Finished);
+    assert_eq!(end.tick, 20);
+    assert_eq!(kend, end);
+    assert_eq!(end.misses.blue, [0, 0, 0, 0], "{:?}", end.misses);
+    server.stop().await;
+}
+
 /// Team tokens are bound to their team and cannot create matches; no token
 /// (right or guessed) appears in any error message or log line.
 #[tokio::test]

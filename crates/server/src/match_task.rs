@@ -487,13 +487,20 @@ impl MatchTask {
                 if reply.send(Ok(joined)).is_err() {
                     return; // the connection went away meanwhile
                 }
+                // Joining mid-tick: the tick waits for the answers of the
+                // robots that still owe one and the connection gets the
+                // tick's observation below. A robot whose previous client
+                // already answered this tick (it left, or lost its
+                // connection, while the tick waited on others) keeps that
+                // action: sending the tick again would ask for a second
+                // answer to an answered tick, so such a connection's first
+                // observation is the next tick's (issue 15 A.5).
+                let mut owes = false;
                 for p in &players {
                     let r = robot(team, *p).index();
                     self.slots[r] = Slot::Client(conn);
                     self.pending[r] = None;
-                    // Joining mid-tick: it gets this tick's observation below,
-                    // and the tick waits for its answer like the others'.
-                    self.answered[r] = false;
+                    owes |= !self.answered[r];
                 }
                 let entry = ConnEntry {
                     id: conn,
@@ -503,7 +510,8 @@ impl MatchTask {
                     kick: Some(kick),
                 };
                 tracing::info!(match_id = %self.params.id, conn, %team, players = ?entry.players, "joined");
-                if let Some(tick) = self.observed {
+                let answered = self.params.mode == Mode::Lockstep && !owes;
+                if let (Some(tick), false) = (self.observed, answered) {
                     send_observation(&self.game, &self.obs_scratch, self.params.id, tick, &entry);
                 }
                 self.conns.push(entry);
