@@ -479,6 +479,57 @@ async fn rejoining_robot_is_not_sent_a_tick_it_already_answered() {
     server.stop().await;
 }
 
+/// Issue 15 A.3, as docs/PROTOCOL.md says: a robot whose client left stands
+/// without counting misses and without the match waiting for it, and a
+/// finished match's `taken` is all false. The deadline is ten minutes, so a
+/// match that waited for the robot, or a miss counted at a deadline, would
+/// show.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn left_robots_count_no_misses_and_a_finished_match_has_no_takers() {
+    let mut cfg = config(20);
+    cfg.start_players = 2;
+    cfg.deadline_ms = 600_000;
+    let server = start(cfg).await;
+    let mut leaver = Client::connect(server.addr(), "leaver").await.unwrap();
+    leaver
+        .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
+        .await
+        .unwrap();
+    let mut stayer = Client::connect(server.addr(), "stayer").await.unwrap();
+    stayer
+        .join(Some(MatchId(1)), Team::Red, RED, &[p(0)])
+        .await
+        .unwrap();
+    let stayer = tokio::spawn(async move {
+        let out = play_out(&mut stayer, &[p(0)]).await;
+        (stayer, out)
+    });
+    // Answer ticks 0..3, then leave with tick 3 unanswered.
+    loop {
+        match leaver.next_push().await.unwrap() {
+            Push::Observation(o) if o.tick < 3 => {
+                leaver.send_actions(o.tick, &stay(&[p(0)])).await.unwrap()
+            }
+            Push::Observation(_) => break,
+            other => panic!("{other:?}"),
+        }
+    }
+    assert_eq!(leaver.leave().await.unwrap(), MatchId(1));
+    let (mut stayer, (end, errors)) = stayer.await.unwrap();
+    assert!(errors.is_empty(), "{errors:?}");
+    assert_eq!(end.tick, 20);
+    assert_eq!(end.misses.blue, [0; 4], "17 ticks stood, none a miss");
+    assert_eq!(end.misses.red, [0; 4]);
+    let info = match_info(&mut stayer, MatchId(1)).await;
+    assert_eq!(info.state, MatchState::Finished);
+    assert_eq!(info.taken.blue, [false; 4]);
+    assert_eq!(
+        info.taken.red, [false; 4],
+        "its last client's slot is cleared"
+    );
+    server.stop().await;
+}
+
 /// Team tokens are bound to their team and cannot create matches; no token
 /// (right or guessed) appears in any error message or log line.
 #[tokio::test]

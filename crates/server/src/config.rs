@@ -139,7 +139,9 @@ impl Limits {
     }
 }
 
-/// Access tokens. Missing ones are generated at start and logged.
+/// Access tokens. Missing ones are generated at random at start. None is
+/// ever logged; `naosoccer server` prints all three on standard output at
+/// start, configured ones too (docs/PROTOCOL.md section 4).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(default, deny_unknown_fields)]
 pub struct TokenConfig {
