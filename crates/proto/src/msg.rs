@@ -482,6 +482,49 @@ pub struct Joined {
     pub control_hz: f32,
     pub total_ticks: u64,
     pub deadline_ms: u64,
+    /// The pitch and the ball-control rule of this match, so a client needs
+    /// no copy of the server's match configuration. Protocol 1.2; absent
+    /// from older servers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pitch: Option<Pitch>,
+}
+
+/// A match's pitch, from the server's match configuration (protocol 1.2).
+/// Lengths in metres, angles in radians.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Pitch {
+    /// Between the goal lines (x): the goal lines are at x = +-length/2.
+    pub field_length: f32,
+    /// Between the touch lines (y).
+    pub field_width: f32,
+    /// The goal mouth, between the inner edges of the posts (centred on y = 0).
+    pub goal_width: f32,
+    /// How far the goal reaches behind its line.
+    pub goal_depth: f32,
+    /// The underside of the crossbar above the ground.
+    pub goal_height: f32,
+    pub ball_radius: f32,
+    /// The paper's `b_d`: a robot controls the ball only when it is closer
+    /// than this to its torso...
+    pub b_d: f32,
+    /// ...and within this angle of its heading (the paper's `b_rad`).
+    pub b_rad: f32,
+    /// How observations place things: see [`Frame`].
+    pub frame: Frame,
+}
+
+/// The frame observations are given in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Frame {
+    /// Each team sees the pitch in its own frame: origin at the centre
+    /// spot, +x toward the opponent goal, +y to the left facing +x, z up;
+    /// heading 0 faces +x and grows counter-clockwise, in (-pi, pi]. Blue's
+    /// frame is the world frame (events use it); red's is turned half round.
+    Team,
+    /// A convention from a newer protocol version.
+    #[serde(other)]
+    Unknown,
 }
 
 /// Pushed once per tick to every joined client: one observation per player

@@ -13,8 +13,8 @@
 use crate::observer::{MatchObserver, TickRecord};
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::msg::{
-    EndReason, ErrorCode, ErrorMsg, Fill, Joined, MatchEnd, MatchId, MatchInfo, MatchState, Mode,
-    PerTeam, Player, Score,
+    EndReason, ErrorCode, ErrorMsg, Fill, Frame, Joined, MatchEnd, MatchId, MatchInfo, MatchState,
+    Mode, PerTeam, Pitch, Player, Score,
 };
 use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::Match;
@@ -483,6 +483,7 @@ impl MatchTask {
                     control_hz: self.game.config().control_hz,
                     total_ticks: self.game.total_ticks(),
                     deadline_ms: self.params.deadline.as_millis() as u64,
+                    pitch: Some(pitch(&self.game)),
                 };
                 if reply.send(Ok(joined)).is_err() {
                     return; // the connection went away meanwhile
@@ -579,6 +580,22 @@ impl MatchTask {
             m.get_mut(r.team())[r.player()] = self.misses[r.index()];
         }
         m
+    }
+}
+
+/// The pitch as `joined` announces it (protocol 1.2).
+fn pitch(game: &Match) -> Pitch {
+    let cfg = game.config();
+    Pitch {
+        field_length: cfg.sim.field_length,
+        field_width: cfg.sim.field_width,
+        goal_width: cfg.sim.goal_width,
+        goal_depth: cfg.sim.goal_depth,
+        goal_height: cfg.sim.goal_height,
+        ball_radius: cfg.sim.ball_radius,
+        b_d: cfg.rules.b_d,
+        b_rad: cfg.rules.b_rad,
+        frame: Frame::Team,
     }
 }
 
