@@ -1,12 +1,13 @@
 //! Protocol 1.2's additions over a real server on an ephemeral loopback
-//! port (issue 15 B): the pitch announced in `joined`.
+//! port (issue 15 B): the referee's events pushed with every observation,
+//! the pitch announced in `joined`.
 
 #[path = "server_support.rs"]
 mod support;
 
-use naosoccer_client::Client;
-use naosoccer_proto::msg::{Frame, MatchId, Pitch, Player};
-use naosoccer_proto::Team;
+use naosoccer_client::{Client, PolicyKind, Push};
+use naosoccer_proto::msg::{EndReason, Frame, MatchId, Pitch, Player, PlayerAction};
+use naosoccer_proto::{Event, RobotId, Team};
 use support::*;
 
 fn all_players() -> Vec<Player> {
@@ -49,5 +50,94 @@ async fn joined_announces_the_pitch() {
         })
     );
     drop(c);
+    server.stop().await;
+}
+
+/// Every observation carries the events of the tick that led to it, each
+/// with the tick it happened on, and `match_end` the last tick's: together
+/// they are the in-process match's events for the same seed and policies.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn events_arrive_with_their_tick_and_equal_the_in_process_match() {
+    let mut cfg = config(600);
+    cfg.deadline_ms = 30_000; // no misses, however loaded the machine
+    cfg.start_players = 4; // blue joins; red is the server's scripted fill
+    let match_cfg = cfg.match_cfg.clone();
+    let server = start(cfg).await;
+    let mut c = Client::connect(server.addr(), "events").await.unwrap();
+    let players = all_players();
+    c.join(Some(MatchId(1)), Team::Blue, BLUE, &players)
+        .await
+        .unwrap();
+    let mut policies: Vec<_> = players
+        .iter()
+        .map(|p| PolicyKind::Scripted.build(42, RobotId::new(Team::Blue, p.index()).unwrap()))
+        .collect();
+    let mut received: Vec<Event> = Vec::new();
+    let mut first = true;
+    let end = loop {
+        match c.next_push().await.unwrap() {
+            Push::Observation(o) => {
+                if first {
+                    assert!(o.events.is_empty(), "no tick led to the first observation");
+                    first = false;
+                }
+                for e in &o.events {
+                    assert_eq!(
+                        e.tick() + 1,
+                        o.tick,
+                        "{e:?} in the observation of tick {}",
+                        o.tick
+                    );
+                }
+                received.extend(o.events);
+                let actions: Vec<PlayerAction> = players
+                    .iter()
+                    .zip(&o.observations)
+                    .zip(&mut policies)
+                    .map(|((p, obs), policy)| PlayerAction {
+                        player: *p,
+                        action: policy.act(obs),
+                    })
+                    .collect();
+                c.send_actions(o.tick, &actions).await.unwrap();
+            }
+            Push::MatchEnd(e) => break e,
+            Push::Error(e) => panic!("{e}"),
+        }
+    };
+    assert_eq!(end.reason, EndReason::Finished);
+    assert_eq!(end.misses.blue, [0; 4]);
+    assert!(!end.events.is_empty(), "the last tick ends the match");
+    for e in &end.events {
+        assert_eq!(e.tick() + 1, end.tick, "{e:?} in match_end");
+    }
+    assert_eq!(end.events.last(), Some(&Event::End { tick: end.tick - 1 }));
+    received.extend(end.events.iter().cloned());
+
+    let mut expected: Vec<Event> = Vec::new();
+    let out = naosoccer::runner::play_match_with(
+        &match_cfg,
+        42,
+        &PolicyKind::Scripted,
+        &PolicyKind::Scripted,
+        |_, _, events| expected.extend_from_slice(events),
+    )
+    .unwrap();
+    assert_eq!(end.tick, out.ticks);
+    assert_eq!(
+        end.state_hash,
+        format!("{:016x}", out.state_hash),
+        "the same match"
+    );
+    assert_eq!(received, expected);
+    // Not a trivial match: kicks, a restart and the end at least.
+    for kind in ["kick", "kick_off", "end"] {
+        assert!(
+            received
+                .iter()
+                .any(|e| serde_json::to_value(e).unwrap()["kind"] == kind),
+            "no {kind} event in {received:?}"
+        );
+    }
     server.stop().await;
 }

@@ -195,7 +195,10 @@ class NaoSoccerParallelEnv(ParallelEnv):
         self.agents = list(self.possible_agents)
         self._take(msg)
         obs = dict(zip(self.agents, self._last_vecs))
-        infos = {a: self._info(p, []) for p, a in enumerate(self.agents)}
+        # The first observation carries the events of the tick that led to
+        # it when the match was already running (none at a kick-off).
+        events = self._events(msg.get("events", []))
+        infos = {a: self._info(p, events) for p, a in enumerate(self.agents)}
         return obs, infos
 
     def step(self, actions: Dict[str, Any]) -> Tuple[
@@ -231,7 +234,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
             goals_for = after["score"]["own"] - before["score"]["own"]
             goals_against = after["score"]["opponent"] - before["score"]["opponent"]
             rew = self._rewards(self._last_rewards, after, goals_for, goals_against)
-            events = _events(before, after, goals_for, goals_against)
+            events = self._events(msg.get("events", []))
             agents = self.agents
             obs = dict(zip(agents, self._last_vecs))
             rewards = dict(zip(agents, rew))
@@ -250,7 +253,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
         goals_against = opp - before["score"]["opponent"]
         sent = end.get("rewards", {}).get(self.team)
         rew = self._rewards(sent or [None] * protocol.PLAYERS_PER_TEAM, None, goals_for, goals_against)
-        events = _events(before, None, goals_for, goals_against)
+        events = self._events(end.get("events", []))
         # No observation follows the last tick; the last one stands in, with
         # the clock at zero and the final score (copies: the caller may still
         # hold the previous step's arrays).
@@ -296,6 +299,12 @@ class NaoSoccerParallelEnv(ParallelEnv):
             return [float(r) for r in sent]  # type: ignore[arg-type]
         w = self.reward_weights or RewardWeights()
         return team_rewards(w, after, goals_for, goals_against)
+
+    def _events(self, events: List[Dict[str, Any]]) -> List[Dict[str, Any]]:
+        """The referee's events of the tick, as the server pushed them
+        (protocol 1.2), each with ``side`` (``"own"`` or ``"opponent"``) for
+        events of a team or robot and ``player`` for events of one robot."""
+        return [_with_side(e, self.team) for e in events]
 
     def _info(self, player: int, events: List[Dict[str, Any]]) -> Dict[str, Any]:
         last = self._last or {}
@@ -344,40 +353,20 @@ class NaoSoccerParallelEnv(ParallelEnv):
         return self._last_vecs[0].copy() if self._last_vecs else np.zeros(OBS_DIM, np.float32)
 
 
-def _events(
-    before: Dict[str, Any], after: Optional[Dict[str, Any]], goals_for: int, goals_against: int
-) -> List[Dict[str, Any]]:
-    """What changed during the tick, as far as observations show it.
 
-    The server pushes no referee events to clients (protocol 1.1); these are
-    derived from consecutive observations: goals (score changes), falls and
-    get-ups of own and opponent robots, and possession changes.
+def _with_side(event: Dict[str, Any], team: str) -> Dict[str, Any]:
+    """A copy of a server event with the env's team-relative keys added.
+
+    Events name teams (``team``) and robots (``robot``, ``from``: 0..3 blue
+    players, 4..7 red) in world terms; positions stay in the world frame.
     """
-    events: List[Dict[str, Any]] = []
-    events += [{"kind": "goal", "side": "own"}] * goals_for
-    events += [{"kind": "goal", "side": "opponent"}] * goals_against
-    if after is None:
-        return events
-    for side, key in (("own", "own"), ("opponent", "opponents")):
-        for p, (a, b) in enumerate(zip(before[key], after[key])):
-            if b["fallen"] and not a["fallen"]:
-                events.append({"kind": "fall", "side": side, "player": p})
-            elif a["fallen"] and not b["fallen"]:
-                events.append({"kind": "get_up", "side": side, "player": p})
-
-    def holder(o: Dict[str, Any]) -> Optional[Tuple[str, Optional[int]]]:
-        for p, c in enumerate(o["control"]):
-            if c:
-                return ("own", p)
-        return ("opponent", None) if o["opponent_control"] else None
-
-    h0, h1 = holder(before), holder(after)
-    if h0 != h1:
-        events.append(
-            {
-                "kind": "possession",
-                "side": h1[0] if h1 else None,
-                "player": h1[1] if h1 else None,
-            }
-        )
-    return events
+    e = dict(event)
+    robot = e.get("robot", e.get("from"))
+    owner: Optional[str] = e.get("team")
+    if owner is None and isinstance(robot, int):
+        owner = protocol.TEAMS[robot // protocol.PLAYERS_PER_TEAM]
+        if "robot" in e:
+            e["player"] = robot % protocol.PLAYERS_PER_TEAM
+    if owner is not None:
+        e["side"] = "own" if owner == team else "opponent"
+    return e

@@ -248,3 +248,41 @@ def test_joins_a_running_servers_match_without_the_admin_token(binary):
             assert e.value.code in ("not_found", "failed_precondition")
         finally:
             env.close()
+
+
+def test_infos_carry_the_servers_events(make_env):
+    # Protocol 1.2: the referee's events of each tick come with the
+    # observation after it (the last tick's with match_end); the env passes
+    # them on with team-relative `side` and `player` added.
+    env = make_env(minutes=0.5, opponent="scripted")
+    obs, infos = env.reset(seed=5)
+    assert infos["blue_0"]["events"] == [], "no tick led to the kick-off"
+    steps = []
+    t = 0
+    while env.agents:
+        obs, rew, term, trunc, infos = env.step({a: wander(t, p) for p, a in enumerate(env.agents)})
+        steps.append((infos["blue_0"], obs["blue_0"].copy()))
+        t += 1
+    end = steps[-1][0]["match_end"]
+    assert len(steps) == end["tick"] == 300
+    kinds = set()
+    for k, (info, vec) in enumerate(steps):
+        for e in info["events"]:
+            kinds.add(e["kind"])
+            assert e["tick"] == k, (k, e)  # played on step k's tick
+            if "robot" in e:
+                team = protocol.TEAMS[e["robot"] // 4]
+                assert e["side"] == ("own" if team == "blue" else "opponent")
+                assert e["player"] == e["robot"] % 4
+            if e["kind"] == "fall" and e["side"] == "own" and k + 1 < len(steps):
+                assert vec[FEATURE_NAMES.index(f"own{e['player']}_fallen")] == 1.0
+    first = steps[0][0]["events"]
+    assert first[0]["kind"] == "kick_off" and first[0]["tick"] == 0
+    assert steps[-1][0]["events"][-1] == {"kind": "end", "tick": 299}
+    assert [e["kind"] for e in end["events"]] == [e["kind"] for e in steps[-1][0]["events"]]
+    goals = [e for info, _ in steps for e in info["events"] if e["kind"] == "goal"]
+    assert sum(e["side"] == "own" for e in goals) == end["score"]["blue"]
+    assert sum(e["side"] == "opponent" for e in goals) == end["score"]["red"]
+    kicks = sum(e["kind"] == "kick" for info, _ in steps for e in info["events"])
+    assert kicks == end["stats"]["blue"]["shots"] + end["stats"]["red"]["shots"]
+    assert {"kick_off", "kick", "end"} <= kinds

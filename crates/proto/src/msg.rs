@@ -12,7 +12,7 @@
 //! unknown `type` deserialises to the `Unknown` variant so that the receiver
 //! can answer it (server) or skip it (client) instead of failing.
 
-use crate::types::{Action, MatchStats, Observation, Team, PLAYERS_PER_TEAM};
+use crate::types::{Action, Event, MatchStats, Observation, Team, PLAYERS_PER_TEAM};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -534,6 +534,12 @@ pub struct ObservationMsg {
     pub match_id: MatchId,
     pub tick: u64,
     pub observations: Vec<Observation>,
+    /// What the referee saw happen on the tick that led here (`tick - 1`),
+    /// each event with the tick it happened on, in the order of
+    /// `Match::step`; empty in a match's first observation. Protocol 1.2;
+    /// absent from older servers.
+    #[serde(default)]
+    pub events: Vec<Event>,
 }
 
 /// [`ObservationMsg`] borrowing its observations, so the server encodes each
@@ -544,6 +550,7 @@ pub struct ObservationRef<'a> {
     pub match_id: MatchId,
     pub tick: u64,
     pub observations: &'a [Observation],
+    pub events: &'a [Event],
 }
 
 /// Why a match ended.
@@ -575,6 +582,11 @@ pub struct MatchEnd {
     /// follows (as `Observation::reward`). Protocol 1.1; read as 0 from 1.0.
     #[serde(default)]
     pub rewards: PerTeam<[f32; PLAYERS_PER_TEAM]>,
+    /// The events of the last tick played when no observation followed it
+    /// (as `ObservationMsg::events`), so the events a client receives add
+    /// up to the match's. Protocol 1.2; absent from older servers.
+    #[serde(default)]
+    pub events: Vec<Event>,
     /// The referee's hash of the final state, 16 hex digits: equal for equal
     /// matches on one build (a string because JSON readers lose u64 precision).
     pub state_hash: String,
@@ -757,15 +769,25 @@ mod tests {
     #[test]
     fn borrowed_forms_encode_like_owned() {
         let observations = vec![obs(0), obs(3)];
+        let events = vec![
+            crate::types::Event::Kick {
+                tick: 6,
+                robot: crate::types::RobotId::new(Team::Red, 2).unwrap(),
+                speed: 2.5,
+            },
+            crate::types::Event::HalfTime { tick: 6 },
+        ];
         let owned = ServerMsg::Observation(ObservationMsg {
             match_id: MatchId(4),
             tick: 7,
             observations: observations.clone(),
+            events: events.clone(),
         });
         let borrowed = ObservationRef {
             match_id: MatchId(4),
             tick: 7,
             observations: &observations,
+            events: &events,
         };
         assert_eq!(
             serde_json::to_string(&owned).unwrap(),

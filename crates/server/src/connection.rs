@@ -302,6 +302,7 @@ impl Conn {
                     tick,
                     len,
                     obs,
+                    events,
                 } => {
                     if let Some(seat) = &mut self.seat {
                         seat.observed = Some(tick);
@@ -310,6 +311,7 @@ impl Conn {
                         match_id,
                         tick,
                         observations: &obs[..len as usize],
+                        events: &events,
                     };
                     self.writer.queue(&msg)?;
                 }

@@ -18,6 +18,7 @@ use naosoccer_proto::msg::{
 };
 use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::Match;
+use std::sync::Arc;
 use std::time::Duration;
 use tokio::sync::{mpsc, oneshot, watch};
 use tokio::time::Instant;
@@ -38,6 +39,8 @@ pub(crate) enum Outgoing {
         tick: u64,
         len: u8,
         obs: [Observation; PLAYERS_PER_TEAM],
+        /// The events of the tick that led here, shared by every connection.
+        events: Arc<Vec<Event>>,
     },
     MatchEnd(MatchEnd),
     Error(ErrorMsg),
@@ -118,7 +121,10 @@ pub(crate) struct MatchTask {
     shutdown: watch::Receiver<bool>,
     observer: Option<Box<dyn MatchObserver>>,
     obs_scratch: Observation,
-    events: Vec<Event>,
+    /// The events of the last tick played; they go out with the next
+    /// observation (or the match end). Reused while no connection still
+    /// holds the previous tick's.
+    events: Arc<Vec<Event>>,
     lateness_us: Vec<u32>,
 }
 
@@ -162,7 +168,7 @@ impl MatchTask {
             shutdown,
             observer,
             obs_scratch,
-            events: Vec::new(),
+            events: Arc::new(Vec::with_capacity(16)),
             lateness_us: Vec::new(),
         }
     }
@@ -206,6 +212,7 @@ impl MatchTask {
                 blue: self.game.rewards(Team::Blue),
                 red: self.game.rewards(Team::Red),
             },
+            events: self.unsent_events(reason),
             state_hash: format!("{:016x}", self.game.state_hash()),
         };
         if reason == EndReason::Internal {
@@ -381,11 +388,17 @@ impl MatchTask {
             }
         }
         let events = self.game.step(&self.actions);
+        // `step` lends its events from a `&mut` borrow; the observer also
+        // needs the match, and the clients get them with the next
+        // observation, so they go through a reused buffer.
+        match Arc::get_mut(&mut self.events) {
+            Some(buf) => {
+                buf.clear();
+                buf.extend_from_slice(events);
+            }
+            None => self.events = Arc::new(events.to_vec()),
+        }
         if let Some(o) = &mut self.observer {
-            // `step` lends its events from a `&mut` borrow; the observer also
-            // needs the match, so the events go through a reused buffer.
-            self.events.clear();
-            self.events.extend_from_slice(events);
             o.on_tick(&TickRecord {
                 game: &self.game,
                 tick,
@@ -418,7 +431,14 @@ impl MatchTask {
         let mut i = 0;
         while i < self.conns.len() {
             let c = &self.conns[i];
-            if send_observation(&self.game, &self.obs_scratch, self.params.id, tick, c) {
+            if send_observation(
+                &self.game,
+                &self.obs_scratch,
+                &self.events,
+                self.params.id,
+                tick,
+                c,
+            ) {
                 i += 1;
                 continue;
             }
@@ -513,7 +533,14 @@ impl MatchTask {
                 tracing::info!(match_id = %self.params.id, conn, %team, players = ?entry.players, "joined");
                 let answered = self.params.mode == Mode::Lockstep && !owes;
                 if let (Some(tick), false) = (self.observed, answered) {
-                    send_observation(&self.game, &self.obs_scratch, self.params.id, tick, &entry);
+                    send_observation(
+                        &self.game,
+                        &self.obs_scratch,
+                        &self.events,
+                        self.params.id,
+                        tick,
+                        &entry,
+                    );
                 }
                 self.conns.push(entry);
                 self.publish_taken();
@@ -574,6 +601,18 @@ impl MatchTask {
         self.info.send_modify(|i| i.taken = taken);
     }
 
+    /// The events `match_end` carries: the last tick's, unless an
+    /// observation already took them out (a match ended between ticks) or
+    /// the match failed.
+    fn unsent_events(&self, reason: EndReason) -> Vec<Event> {
+        let sent = self.observed == Some(self.game.tick());
+        if sent || reason == EndReason::Internal {
+            Vec::new()
+        } else {
+            self.events.to_vec()
+        }
+    }
+
     fn misses_per_team(&self) -> PerTeam<[u64; PLAYERS_PER_TEAM]> {
         let mut m = PerTeam::<[u64; PLAYERS_PER_TEAM]>::default();
         for r in RobotId::all() {
@@ -607,6 +646,7 @@ fn robot(team: Team, p: Player) -> RobotId {
 fn send_observation(
     game: &Match,
     template: &Observation,
+    events: &Arc<Vec<Event>>,
     match_id: MatchId,
     tick: u64,
     c: &ConnEntry,
@@ -620,6 +660,7 @@ fn send_observation(
         tick,
         len: c.players.len() as u8,
         obs,
+        events: Arc::clone(events),
     };
     !matches!(c.out.try_send(msg), Err(mpsc::error::TrySendError::Full(_)))
 }
