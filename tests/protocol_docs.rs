@@ -17,6 +17,7 @@ const CLIENT_TYPES: &[&str] = &[
     "action",
     "leave",
     "ping",
+    "end_match",
 ];
 const SERVER_TYPES: &[&str] = &[
     "welcome",
@@ -27,6 +28,7 @@ const SERVER_TYPES: &[&str] = &[
     "match_end",
     "left",
     "pong",
+    "match_ended",
     "error",
 ];
 

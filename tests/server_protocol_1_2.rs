@@ -1,13 +1,16 @@
 //! Protocol 1.2's additions over a real server on an ephemeral loopback
 //! port (issue 15 B): the referee's events pushed with every observation,
-//! the pitch announced in `joined`.
+//! the pitch announced in `joined`, `end_match`.
 
 #[path = "server_support.rs"]
 mod support;
 
-use naosoccer_client::{Client, PolicyKind, Push};
-use naosoccer_proto::msg::{EndReason, Frame, MatchId, Pitch, Player, PlayerAction};
-use naosoccer_proto::{Event, RobotId, Team};
+use naosoccer_client::{Client, ClientError, PolicyKind, Push};
+use naosoccer_proto::msg::{
+    CreateMatch, EndReason, ErrorCode, Frame, Hello, MatchEnd, MatchId, MatchState, Pitch, Player,
+    PlayerAction, Version, PROTOCOL_NAME,
+};
+use naosoccer_proto::{Action, Event, RobotId, Team};
 use support::*;
 
 fn all_players() -> Vec<Player> {
@@ -139,5 +142,125 @@ async fn events_arrive_with_their_tick_and_equal_the_in_process_match() {
             "no {kind} event in {received:?}"
         );
     }
+    server.stop().await;
+}
+
+async fn next_observation_tick(c: &mut Client) -> u64 {
+    match c.next_push().await.unwrap() {
+        Push::Observation(o) => o.tick,
+        other => panic!("expected an observation, got {other:?}"),
+    }
+}
+
+async fn next_match_end(c: &mut Client) -> MatchEnd {
+    match c.next_push().await.unwrap() {
+        Push::MatchEnd(e) => e,
+        other => panic!("expected match_end, got {other:?}"),
+    }
+}
+
+fn stay(players: &[Player]) -> Vec<PlayerAction> {
+    players
+        .iter()
+        .map(|p| PlayerAction {
+            player: *p,
+            action: Action::Stay,
+        })
+        .collect()
+}
+
+fn code(r: Result<naosoccer_proto::msg::MatchInfo, ClientError>) -> Option<ErrorCode> {
+    r.unwrap_err().code()
+}
+
+/// `end_match` (admin) ends a running match at the tick it is waiting on:
+/// every client of it gets its `match_end` (reason `ended`; `shutdown` for a
+/// client that said 1.1), then the admin the final description. A waiting
+/// match can be ended too; a finished one cannot.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn end_match_ends_a_match_with_match_end_to_every_client() {
+    let mut cfg = config(600);
+    cfg.deadline_ms = 600_000; // the match waits for blue at tick 5
+    cfg.start_players = 5;
+    let server = start(cfg).await;
+    let mut admin = Client::connect(server.addr(), "admin").await.unwrap();
+    let mut blue = Client::connect(server.addr(), "blue").await.unwrap();
+    let old = Hello {
+        protocol: PROTOCOL_NAME.into(),
+        version: Version { major: 1, minor: 1 },
+        client: Some("a 1.1 robot".into()),
+    };
+    let stream = tokio::net::TcpStream::connect(server.addr()).await.unwrap();
+    let mut red = Client::handshake(stream, &old).await.unwrap();
+    let team = all_players();
+    let one = [Player::new(1).unwrap()];
+    blue.join(Some(MatchId(1)), Team::Blue, BLUE, &team)
+        .await
+        .unwrap();
+    red.join(Some(MatchId(1)), Team::Red, RED, &one)
+        .await
+        .unwrap();
+    for t in 0..=5 {
+        assert_eq!(next_observation_tick(&mut blue).await, t);
+        assert_eq!(next_observation_tick(&mut red).await, t);
+        if t < 5 {
+            blue.send_actions(t, &stay(&team)).await.unwrap();
+        }
+        red.send_actions(t, &stay(&one)).await.unwrap();
+    }
+
+    // Wrong token, unknown match: refused, the match goes on.
+    assert_eq!(
+        code(admin.end_match(BLUE, MatchId(1)).await),
+        Some(ErrorCode::PermissionDenied)
+    );
+    assert_eq!(
+        code(admin.end_match(ADMIN, MatchId(9)).await),
+        Some(ErrorCode::NotFound)
+    );
+    let info = admin.end_match(ADMIN, MatchId(1)).await.unwrap();
+    assert_eq!(info.state, MatchState::Finished);
+    assert_eq!(info.tick, 5, "ended at the tick it waited on");
+
+    let b = next_match_end(&mut blue).await;
+    let r = next_match_end(&mut red).await;
+    assert_eq!(b.reason, EndReason::Ended);
+    assert_eq!(r.reason, EndReason::Shutdown, "1.1 knows no `ended`");
+    for e in [&b, &r] {
+        assert_eq!(e.match_id, MatchId(1));
+        assert_eq!(e.tick, 5);
+        assert_eq!(e.score, info.score);
+        assert!(e.events.is_empty(), "observation 5 carried tick 4's events");
+    }
+    assert_eq!(b.state_hash, r.state_hash);
+    assert_eq!(
+        code(admin.end_match(ADMIN, MatchId(1)).await),
+        Some(ErrorCode::FailedPrecondition)
+    );
+    // Back in the lobby: the ended match cannot be joined.
+    let err = blue
+        .join(Some(MatchId(1)), Team::Blue, BLUE, &team)
+        .await
+        .unwrap_err();
+    assert_eq!(err.code(), Some(ErrorCode::FailedPrecondition));
+
+    // A match still waiting for its players ends at tick 0, and an admin
+    // that plays in the match gets its own match_end too.
+    let created = admin
+        .create_match(CreateMatch {
+            token: ADMIN.into(),
+            start_players: Some(8),
+            ..CreateMatch::default()
+        })
+        .await
+        .unwrap();
+    admin
+        .join(Some(created.match_id), Team::Blue, BLUE, &one)
+        .await
+        .unwrap();
+    let info = admin.end_match(ADMIN, created.match_id).await.unwrap();
+    assert_eq!((info.state, info.tick), (MatchState::Finished, 0));
+    let end = next_match_end(&mut admin).await;
+    assert_eq!((end.reason, end.tick), (EndReason::Ended, 0));
     server.stop().await;
 }

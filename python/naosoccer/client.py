@@ -178,6 +178,13 @@ class Client:
                 msg[key] = value
         return self.request(msg, expect="match_created")["info"]
 
+    def end_match(self, token: str, match_id: int) -> Dict[str, Any]:
+        """Ends a match early (admin token; protocol 1.2); returns its final
+        ``MatchInfo``. Every client of the match gets a ``match_end`` with
+        reason ``ended`` first."""
+        msg = {"type": "end_match", "token": token, "match_id": int(match_id)}
+        return self.request(msg, expect="match_ended")["info"]
+
     def list_matches(self) -> List[Dict[str, Any]]:
         return self.request({"type": "list_matches"}, expect="match_list")["matches"]
 
@@ -265,5 +272,15 @@ def _is_push(msg: Dict[str, Any]) -> bool:
 
 
 _KNOWN_SERVER_TYPES = frozenset(
-    {"welcome", "match_created", "match_list", "joined", "observation", "match_end", "left", "pong"}
+    {
+        "welcome",
+        "match_created",
+        "match_list",
+        "joined",
+        "observation",
+        "match_end",
+        "left",
+        "pong",
+        "match_ended",
+    }
 )

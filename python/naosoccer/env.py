@@ -44,7 +44,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
     computed here instead by :func:`naosoccer.obs.team_rewards` with those
     weights (also against a 1.0 server, which sends none). The episode is the whole match: when
     its clock runs out every agent is terminated (truncated if the server
-    shuts down) and the final ``infos`` carry the match statistics.
+    shuts down or an admin ends the match) and the final ``infos`` carry the match statistics.
 
     Where the match comes from:
 
@@ -265,7 +265,9 @@ class NaoSoccerParallelEnv(ParallelEnv):
         agents = self.agents
         obs = dict(zip(agents, vecs))
         rewards = dict(zip(agents, rew))
-        shutdown = end.get("reason") == "shutdown"
+        # Stopped before its clock ran out (the server stopping, or an admin
+        # ending the match): the episode is truncated, not terminated.
+        shutdown = end.get("reason") in ("shutdown", "ended")
         terminations = dict.fromkeys(agents, not shutdown)
         truncations = dict.fromkeys(agents, shutdown)
         infos = {}

@@ -95,3 +95,52 @@ def test_requests_during_a_match_keep_the_pushes(server):
         with pytest.raises(NaoSoccerError) as e:
             c.request({"type": "leave"})
         assert e.value.code == "failed_precondition"
+
+
+def test_end_match_sends_match_end_to_every_client(server):
+    # Protocol 1.2: an admin ends a match early; each of its clients gets a
+    # match_end with reason "ended", the admin the final MatchInfo.
+    with Client(server.host, server.port) as admin, Client(server.host, server.port) as blue, Client(
+        server.host, server.port
+    ) as red:
+        info = admin.create_match(server.tokens["admin"], seed=3, minutes=1, fill="idle", start_players=2)
+        mid = info["match_id"]
+        blue.join("blue", server.tokens["blue"], [0], match_id=mid)
+        red.join("red", server.tokens["red"], [3], match_id=mid)
+        for tick in range(3):
+            for c, p in ((blue, 0), (red, 3)):
+                msg = c.recv()
+                assert msg["type"] == "observation" and msg["tick"] == tick
+                if tick < 2:
+                    c.send_actions(tick, [(p, "stay")])
+        with pytest.raises(NaoSoccerError) as e:
+            admin.end_match(server.tokens["blue"], mid)
+        assert e.value.code == "permission_denied" and e.value.in_reply_to == "end_match"
+        ended = admin.end_match(server.tokens["admin"], mid)
+        assert ended["state"] == "finished" and ended["tick"] == 2
+        for c in (blue, red):
+            end = c.recv()
+            assert end["type"] == "match_end" and end["reason"] == "ended" and end["tick"] == 2
+        with pytest.raises(NaoSoccerError) as e:
+            admin.end_match(server.tokens["admin"], mid)
+        assert e.value.code == "failed_precondition"
+
+
+def test_env_truncates_an_ended_match(binary):
+    from naosoccer import LocalServer, NaoSoccerParallelEnv
+
+    with LocalServer(binary) as srv:
+        env = NaoSoccerParallelEnv(
+            host=srv.host, port=srv.port, token=srv.tokens["blue"], admin_token=srv.tokens["admin"], minutes=1
+        )
+        try:
+            env.reset(seed=1)
+            env.step({a: 4 for a in env.agents})
+            with Client(srv.host, srv.port) as admin:
+                admin.end_match(srv.tokens["admin"], env.match_id)
+            _, _, terms, truncs, infos = env.step({a: 4 for a in env.agents})
+            assert env.agents == []
+            assert all(truncs.values()) and not any(terms.values())
+            assert infos["blue_0"]["match_end"]["reason"] == "ended"
+        finally:
+            env.close()

@@ -5,7 +5,7 @@ use crate::framed::{FrameReader, FrameWriter, WireError};
 use crate::policy::Policy;
 use naosoccer_proto::frame::DEFAULT_MAX_FRAME;
 use naosoccer_proto::msg::{
-    ActionRef, ClientMsg, CreateMatch, ErrorCode, ErrorMsg, Hello, Join, Joined, Leave,
+    ActionRef, ClientMsg, CreateMatch, EndMatch, ErrorCode, ErrorMsg, Hello, Join, Joined, Leave,
     ListMatches, MatchEnd, MatchId, MatchInfo, ObservationMsg, Ping, Player, PlayerAction,
     ServerMsg, Welcome, PROTOCOL_NAME, PROTOCOL_VERSION,
 };
@@ -170,6 +170,23 @@ impl Client {
     pub async fn create_match(&mut self, req: CreateMatch) -> Result<MatchInfo, ClientError> {
         match self.request(&ClientMsg::CreateMatch(req)).await? {
             ServerMsg::MatchCreated(c) => Ok(c.info),
+            other => Err(ClientError::Unexpected(format!("{other:?}"))),
+        }
+    }
+
+    /// Ends a match early (admin token; protocol 1.2): its clients get their
+    /// `match_end` first. Returns the match as it ended.
+    pub async fn end_match(
+        &mut self,
+        token: &str,
+        match_id: MatchId,
+    ) -> Result<MatchInfo, ClientError> {
+        let req = EndMatch {
+            token: token.to_owned(),
+            match_id,
+        };
+        match self.request(&ClientMsg::EndMatch(req)).await? {
+            ServerMsg::MatchEnded(e) => Ok(e.info),
             other => Err(ClientError::Unexpected(format!("{other:?}"))),
         }
     }

@@ -186,6 +186,7 @@ pub enum ClientMsg {
     Action(ActionMsg),
     Leave(Leave),
     Ping(Ping),
+    EndMatch(EndMatch),
     /// A `type` this build does not know; answered with `unimplemented`.
     #[serde(other, skip_serializing)]
     Unknown,
@@ -193,7 +194,7 @@ pub enum ClientMsg {
 
 impl ClientMsg {
     /// The wire names of the known `type`s.
-    pub const KINDS: [&'static str; 7] = [
+    pub const KINDS: [&'static str; 8] = [
         "hello",
         "create_match",
         "list_matches",
@@ -201,6 +202,7 @@ impl ClientMsg {
         "action",
         "leave",
         "ping",
+        "end_match",
     ];
 
     /// Decodes one frame's payload. On failure, the error keeps what could
@@ -222,6 +224,7 @@ impl ClientMsg {
             ClientMsg::Action(_) => "action",
             ClientMsg::Leave(_) => "leave",
             ClientMsg::Ping(_) => "ping",
+            ClientMsg::EndMatch(_) => "end_match",
             ClientMsg::Unknown => "unknown",
         }
     }
@@ -392,6 +395,15 @@ pub struct ActionRef<'a> {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub struct Leave {}
 
+/// End a match early (admin token; protocol 1.2): every client of the
+/// match gets its `match_end` (reason `ended`), then the reply
+/// [`MatchEnded`] comes.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct EndMatch {
+    pub token: String,
+    pub match_id: MatchId,
+}
+
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub struct Ping {
     /// Echoed in the `pong`.
@@ -413,6 +425,7 @@ pub enum ServerMsg {
     MatchEnd(MatchEnd),
     Left(Left),
     Pong(Pong),
+    MatchEnded(MatchEnded),
     Error(ErrorMsg),
     /// A `type` this build does not know (from a newer minor version); skip it.
     #[serde(other, skip_serializing)]
@@ -431,6 +444,12 @@ pub struct Welcome {
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MatchCreated {
+    pub info: MatchInfo,
+}
+
+/// The reply to `end_match`: the match as it ended (protocol 1.2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MatchEnded {
     pub info: MatchInfo,
 }
 
@@ -564,6 +583,9 @@ pub enum EndReason {
     /// The match failed inside the server (a bug); an `internal` error
     /// follows. The server and its other matches go on.
     Internal,
+    /// An admin ended it early (`end_match`; protocol 1.2). A client that
+    /// said a minor version below 2 in its `hello` is told `shutdown`.
+    Ended,
 }
 
 /// Pushed once when the match ends, to every client still joined; after it
@@ -946,6 +968,10 @@ mod tests {
             ClientMsg::ListMatches(ListMatches {}),
             ClientMsg::Leave(Leave {}),
             ClientMsg::Ping(Ping { nonce: 3 }),
+            ClientMsg::EndMatch(EndMatch {
+                token: "t".into(),
+                match_id: MatchId(2),
+            }),
             ClientMsg::CreateMatch(CreateMatch::default()),
             ClientMsg::Hello(Hello::new("x")),
             ClientMsg::Action(ActionMsg {

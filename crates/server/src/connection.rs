@@ -10,9 +10,9 @@ use crate::server::Shared;
 use naosoccer_client::framed::{FrameReader, FrameWriter, WireError};
 use naosoccer_proto::frame::FrameError;
 use naosoccer_proto::msg::{
-    ActionMsg, ClientMsg, ErrorCode, ErrorMsg, FrameHead, Hello, Join, Left, MatchCreated, MatchId,
-    MatchList, ObservationRef, Player, Pong, ServerMsg, Undecodable, Welcome, PROTOCOL_NAME,
-    PROTOCOL_VERSION,
+    ActionMsg, ClientMsg, EndMatch, EndReason, ErrorCode, ErrorMsg, FrameHead, Hello, Join, Left,
+    MatchCreated, MatchEnded, MatchId, MatchList, ObservationRef, Player, Pong, ServerMsg,
+    Undecodable, Welcome, PROTOCOL_NAME, PROTOCOL_VERSION,
 };
 use naosoccer_proto::{Action, Team, PLAYERS_PER_TEAM};
 use std::net::SocketAddr;
@@ -110,6 +110,8 @@ struct Conn {
     shared: Arc<Shared>,
     writer: FrameWriter<OwnedWriteHalf>,
     greeted: bool,
+    /// The minor protocol version the client said in its `hello`.
+    minor: u32,
     seat: Option<Seat>,
     joins: u32,
     bucket: Bucket,
@@ -137,6 +139,7 @@ pub(crate) async fn serve(stream: TcpStream, peer: SocketAddr, id: ConnId, share
         shared,
         writer: FrameWriter::new(w, max_frame),
         greeted: false,
+        minor: 0,
         seat: None,
         joins: 0,
         bucket,
@@ -316,7 +319,12 @@ impl Conn {
                     self.writer.queue(&msg)?;
                 }
                 Outgoing::Error(e) => self.writer.queue(&ServerMsg::Error(e))?,
-                Outgoing::MatchEnd(end) => {
+                Outgoing::MatchEnd(mut end) => {
+                    if end.reason == EndReason::Ended && self.minor < 2 {
+                        // 1.0 and 1.1 know no `ended`: the nearest they know
+                        // is a match stopped before its clock ran out.
+                        end.reason = EndReason::Shutdown;
+                    }
                     self.writer.queue(&ServerMsg::MatchEnd(end))?;
                     self.seat = None;
                 }
@@ -383,6 +391,15 @@ impl Conn {
                 )),
             },
             ClientMsg::Ping(p) => Ok(ServerMsg::Pong(Pong { nonce: p.nonce })),
+            ClientMsg::EndMatch(req) => {
+                let result = self.end_match(req).await;
+                // Its clients' match_end went out first; if this connection
+                // played in the match, its own comes before the reply.
+                if let Some(out) = self.seat.as_mut().and_then(|s| s.out.try_recv().ok()) {
+                    self.push(out).await?;
+                }
+                result
+            }
             ClientMsg::Unknown => Err(ErrorMsg::new(
                 ErrorCode::Unimplemented,
                 "unknown message type; see docs/PROTOCOL.md for the list",
@@ -420,6 +437,7 @@ impl Conn {
             return Err(ErrorMsg::new(ErrorCode::Unimplemented, m).fatal());
         }
         self.greeted = true;
+        self.minor = h.version.minor;
         tracing::debug!(conn = self.id, peer = %self.peer, client = ?h.client, version = %h.version, "hello");
         Ok(ServerMsg::Welcome(Welcome {
             protocol: PROTOCOL_NAME.into(),
@@ -427,6 +445,29 @@ impl Conn {
             server: concat!("naosoccer-server ", env!("CARGO_PKG_VERSION")).into(),
             max_frame: self.shared.config.max_frame.min(u32::MAX as usize) as u32,
         }))
+    }
+
+    async fn end_match(&mut self, req: EndMatch) -> Result<ServerMsg, ErrorMsg> {
+        if !token_eq(&req.token, &self.shared.tokens.admin) {
+            return Err(ErrorMsg::new(
+                ErrorCode::PermissionDenied,
+                "end_match needs the admin token",
+            ));
+        }
+        let id = req.match_id;
+        let tx = self.shared.running_match(id)?;
+        let finished = || {
+            ErrorMsg::new(
+                ErrorCode::FailedPrecondition,
+                format!("match {id} has finished"),
+            )
+        };
+        let (reply_tx, reply_rx) = oneshot::channel();
+        tx.send(MatchCmd::End { reply: reply_tx })
+            .await
+            .map_err(|_| finished())?;
+        let info = reply_rx.await.map_err(|_| finished())?;
+        Ok(ServerMsg::MatchEnded(MatchEnded { info }))
     }
 
     async fn join(&mut self, j: Join) -> Result<ServerMsg, ErrorMsg> {

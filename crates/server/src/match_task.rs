@@ -59,6 +59,9 @@ pub(crate) enum MatchCmd {
     },
     /// The connection left or closed; its robots stand from now on.
     Leave { conn: ConnId },
+    /// End the match now (`end_match`): its clients get their `match_end`,
+    /// then the reply carries the final description.
+    End { reply: oneshot::Sender<MatchInfo> },
     /// Validated by the connection: only players it controls.
     Action {
         conn: ConnId,
@@ -126,6 +129,8 @@ pub(crate) struct MatchTask {
     /// holds the previous tick's.
     events: Arc<Vec<Event>>,
     lateness_us: Vec<u32>,
+    /// Who asked to end the match early, if anyone: told once it has ended.
+    ended_by: Option<oneshot::Sender<MatchInfo>>,
 }
 
 enum Stop {
@@ -133,6 +138,8 @@ enum Stop {
     Shutdown,
     /// A tick panicked: the match cannot go on, the server can.
     Panicked,
+    /// An admin ended it (`end_match`).
+    Ended,
 }
 
 impl MatchTask {
@@ -170,6 +177,7 @@ impl MatchTask {
             obs_scratch,
             events: Arc::new(Vec::with_capacity(16)),
             lateness_us: Vec::new(),
+            ended_by: None,
         }
     }
 
@@ -199,6 +207,7 @@ impl MatchTask {
             Stop::Finished => EndReason::Finished,
             Stop::Shutdown => EndReason::Shutdown,
             Stop::Panicked => EndReason::Internal,
+            Stop::Ended => EndReason::Ended,
         };
         let (blue, red) = self.game.score();
         let end = MatchEnd {
@@ -252,6 +261,9 @@ impl MatchTask {
         for c in self.conns.drain(..) {
             deliver(&c.out, Outgoing::MatchEnd(end.clone()));
         }
+        if let Some(reply) = self.ended_by.take() {
+            let _ = reply.send(self.info.borrow().clone());
+        }
     }
 
     async fn play(&mut self) -> Stop {
@@ -260,7 +272,9 @@ impl MatchTask {
                 biased;
                 _ = self.shutdown.changed() => return Stop::Shutdown,
                 cmd = self.rx.recv() => match cmd {
-                    Some(cmd) => self.handle(cmd),
+                    Some(cmd) => if let Some(stop) = self.handle(cmd) {
+                        return stop;
+                    },
                     None => return Stop::Shutdown,
                 },
             }
@@ -289,7 +303,9 @@ impl MatchTask {
                     biased;
                     _ = self.shutdown.changed() => return Stop::Shutdown,
                     cmd = self.rx.recv() => match cmd {
-                        Some(cmd) => self.handle(cmd),
+                        Some(cmd) => if let Some(stop) = self.handle(cmd) {
+                        return stop;
+                    },
                         None => return Stop::Shutdown,
                     },
                     _ = &mut deadline => break,
@@ -335,7 +351,9 @@ impl MatchTask {
                     _ = self.shutdown.changed() => return Stop::Shutdown,
                     _ = &mut sleep => break,
                     cmd = self.rx.recv() => match cmd {
-                        Some(cmd) => self.handle(cmd),
+                        Some(cmd) => if let Some(stop) = self.handle(cmd) {
+                        return stop;
+                    },
                         None => return Stop::Shutdown,
                     },
                 }
@@ -470,8 +488,14 @@ impl MatchTask {
         Some(c)
     }
 
-    fn handle(&mut self, cmd: MatchCmd) {
+    /// Applies one command; `Some` when it ends the match.
+    fn handle(&mut self, cmd: MatchCmd) -> Option<Stop> {
         match cmd {
+            MatchCmd::End { reply } => {
+                tracing::info!(match_id = %self.params.id, tick = self.game.tick(), "ended by an admin");
+                self.ended_by = Some(reply);
+                return Some(Stop::Ended);
+            }
             MatchCmd::Join {
                 conn,
                 team,
@@ -492,7 +516,7 @@ impl MatchTask {
                         self.params.id
                     );
                     let _ = reply.send(Err(ErrorMsg::new(ErrorCode::FailedPrecondition, msg)));
-                    return;
+                    return None;
                 }
                 let joined = Joined {
                     match_id: self.params.id,
@@ -506,7 +530,7 @@ impl MatchTask {
                     pitch: Some(pitch(&self.game)),
                 };
                 if reply.send(Ok(joined)).is_err() {
-                    return; // the connection went away meanwhile
+                    return None; // the connection went away meanwhile
                 }
                 // Joining mid-tick: the tick waits for the answers of the
                 // robots that still owe one and the connection gets the
@@ -556,9 +580,8 @@ impl MatchTask {
                 tick,
                 actions,
             } => {
-                let Some(c) = self.conns.iter().find(|c| c.id == conn) else {
-                    return;
-                };
+                // From a connection no longer in the match: nothing to do.
+                let c = self.conns.iter().find(|c| c.id == conn)?;
                 let current = self.observed.unwrap_or(0);
                 if self.params.mode == Mode::Lockstep && tick < current {
                     let e = ErrorMsg {
@@ -569,7 +592,7 @@ impl MatchTask {
                         tick: Some(tick),
                     };
                     deliver(&c.out, Outgoing::Error(e));
-                    return;
+                    return None;
                 }
                 for (p, a) in actions.iter().enumerate() {
                     let Some(a) = *a else { continue };
@@ -591,6 +614,7 @@ impl MatchTask {
                 }
             }
         }
+        None
     }
 
     fn publish_taken(&self) {

@@ -214,6 +214,19 @@ impl Shared {
         }
     }
 
+    /// The channel of an unfinished match, for `end_match`.
+    pub(crate) fn running_match(&self, id: MatchId) -> Result<mpsc::Sender<MatchCmd>, ErrorMsg> {
+        let reg = self.matches.lock().expect("registry lock poisoned");
+        let e = reg.matches.get(&id).ok_or_else(|| {
+            ErrorMsg::new(ErrorCode::NotFound, format!("no match {id} on this server"))
+        })?;
+        if e.info.borrow().state == MatchState::Finished {
+            let m = format!("match {id} has finished");
+            return Err(ErrorMsg::new(ErrorCode::FailedPrecondition, m));
+        }
+        Ok(e.tx.clone())
+    }
+
     pub(crate) fn task_guard(&self) -> mpsc::Sender<()> {
         self.done.clone()
     }
