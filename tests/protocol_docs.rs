@@ -144,3 +144,18 @@ fn documented_error_codes_are_the_real_ones() {
         );
     }
 }
+
+#[test]
+fn the_document_is_this_builds_version_with_a_changelog_row() {
+    use naosoccer_proto::msg::PROTOCOL_VERSION;
+    let title = DOC.lines().next().unwrap();
+    assert!(
+        title.ends_with(&format!("version {PROTOCOL_VERSION}")),
+        "{title}"
+    );
+    let row = format!("| {PROTOCOL_VERSION} |");
+    assert!(
+        DOC.lines().any(|l| l.starts_with(&row)),
+        "no changelog row for {PROTOCOL_VERSION}"
+    );
+}
