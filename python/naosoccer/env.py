@@ -88,7 +88,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
         binary: Optional[str] = None,
         server_args: Sequence[str] = (),
         deadline_ms: Optional[int] = 600_000,
-        field: FieldScale = FieldScale(),
+        field: Optional[FieldScale] = None,
         reward_weights: Optional[RewardWeights] = None,
         on_match: Optional[Callable[[int], None]] = None,
         timeout: float = 120.0,
@@ -127,7 +127,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
         self.client: Optional[Client] = None
         self.match_id: Optional[int] = None
         self.joined: Optional[Dict[str, Any]] = None
-        self._encoder = ObservationEncoder(field)
+        self._encoder = ObservationEncoder(field or FieldScale())
         self._tick = 0
         self._last: Optional[Dict[str, Any]] = None
         self._last_vecs: List[np.ndarray] = []
@@ -188,7 +188,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
         if self.on_match is not None:
             self.on_match(self.match_id)
         control_hz = float(self.joined["control_hz"])
-        self._encoder = ObservationEncoder(self.field, float(self.joined["total_ticks"]) / control_hz)
+        self._encoder = ObservationEncoder(self._field_scale(), float(self.joined["total_ticks"]) / control_hz)
         msg = self.client.recv()
         if msg["type"] != "observation":
             raise ProtocolError(f"expected the first observation of match {self.match_id}, got {msg['type']!r}")
@@ -301,6 +301,16 @@ class NaoSoccerParallelEnv(ParallelEnv):
             return [float(r) for r in sent]  # type: ignore[arg-type]
         w = self.reward_weights or RewardWeights()
         return team_rewards(w, after, goals_for, goals_against)
+
+    def _field_scale(self) -> FieldScale:
+        """The ``field`` given, else the pitch ``joined`` announced
+        (protocol 1.2), else the built-in configuration's."""
+        if self.field is not None:
+            return self.field
+        pitch = self.joined.get("pitch") if self.joined else None
+        if pitch:
+            return FieldScale(float(pitch["field_length"]), float(pitch["field_width"]))
+        return FieldScale()
 
     def _events(self, events: List[Dict[str, Any]]) -> List[Dict[str, Any]]:
         """The referee's events of the tick, as the server pushed them

@@ -84,8 +84,9 @@ OBS_LOW, OBS_HIGH = _bounds()
 class FieldScale:
     """The pitch's size in metres (inside the lines), for normalisation.
 
-    The protocol does not announce it; the defaults are those of the
-    server's built-in match configuration (assets/match.toml).
+    The env takes it from the pitch ``joined`` announces (protocol 1.2);
+    the defaults are those of the server's built-in match configuration
+    (assets/match.toml), for older servers.
     """
 
     length: float = 6.0

@@ -286,3 +286,19 @@ def test_infos_carry_the_servers_events(make_env):
     kicks = sum(e["kind"] == "kick" for info, _ in steps for e in info["events"])
     assert kicks == end["stats"]["blue"]["shots"] + end["stats"]["red"]["shots"]
     assert {"kick_off", "kick", "end"} <= kinds
+
+
+def test_positions_are_scaled_by_the_announced_pitch(make_env, tmp_path):
+    # Protocol 1.2: joined announces the pitch, so the env normalises by the
+    # server's field without being told it.
+    cfg = tmp_path / "long.toml"
+    cfg.write_text("[sim]\nfield_length = 7.5\nfield_width = 5.0\n")
+    env = make_env(minutes=0.1, server_args=["--match-config", str(cfg)])
+    obs, _ = env.reset(seed=2)
+    assert env.joined["pitch"]["field_length"] == 7.5
+    assert env.joined["pitch"]["frame"] == "team"
+    own = env._last["own"]
+    vec = obs["blue_0"]
+    for p in range(4):
+        assert vec[FEATURE_NAMES.index(f"own{p}_x")] == pytest.approx(own[p]["x"] / 3.75, abs=1e-6)
+        assert vec[FEATURE_NAMES.index(f"own{p}_y")] == pytest.approx(own[p]["y"] / 2.5, abs=1e-6)
