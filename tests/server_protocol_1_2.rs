@@ -264,3 +264,45 @@ async fn end_match_ends_a_match_with_match_end_to_every_client() {
     assert_eq!((end.reason, end.tick), (EndReason::Ended, 0));
     server.stop().await;
 }
+
+/// A client that joins a running match gets, with its first observation,
+/// the events of the tick that led to it: the same as every other client.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_client_joining_mid_match_gets_the_events_of_the_tick_before() {
+    let mut cfg = config(600);
+    cfg.deadline_ms = 600_000; // the match waits for blue at tick 1
+    cfg.start_players = 4;
+    let server = start(cfg).await;
+    let mut blue = Client::connect(server.addr(), "blue").await.unwrap();
+    let team = all_players();
+    blue.join(Some(MatchId(1)), Team::Blue, BLUE, &team)
+        .await
+        .unwrap();
+    assert_eq!(next_observation_tick(&mut blue).await, 0);
+    blue.send_actions(0, &stay(&team)).await.unwrap();
+    let seen_by_blue = match blue.next_push().await.unwrap() {
+        Push::Observation(o) => o,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(seen_by_blue.tick, 1);
+    assert!(
+        seen_by_blue
+            .events
+            .iter()
+            .any(|e| matches!(e, Event::KickOff { tick: 0, .. })),
+        "the start's kick-off comes with tick 0's events: {:?}",
+        seen_by_blue.events
+    );
+    let mut red = Client::connect(server.addr(), "red").await.unwrap();
+    red.join(Some(MatchId(1)), Team::Red, RED, &[Player::new(2).unwrap()])
+        .await
+        .unwrap();
+    let first = match red.next_push().await.unwrap() {
+        Push::Observation(o) => o,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(first.tick, 1);
+    assert_eq!(first.events, seen_by_blue.events);
+    drop((blue, red));
+    server.stop().await;
+}
