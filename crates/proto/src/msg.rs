@@ -994,6 +994,34 @@ mod tests {
         }
     }
 
+    /// Protocol 1.2's fields are optional: messages from a 1.1 server read
+    /// without them, and a frame convention from a newer one reads as
+    /// unknown instead of failing.
+    #[test]
+    fn protocol_1_2_fields_are_optional() {
+        let j: ServerMsg = serde_json::from_str(
+            r#"{"type":"joined","match_id":1,"team":"red","players":[2],"seed":3,"mode":"lockstep","control_hz":10.0,"total_ticks":60,"deadline_ms":100}"#,
+        )
+        .unwrap();
+        assert!(matches!(j, ServerMsg::Joined(Joined { pitch: None, .. })));
+        let p: Pitch = serde_json::from_str(
+            r#"{"field_length":6,"field_width":4.5,"goal_width":2.6,"goal_depth":1,"goal_height":0.8,"ball_radius":0.05,"b_d":0.3,"b_rad":0.4,"frame":"polar"}"#,
+        )
+        .unwrap();
+        assert_eq!(p.frame, Frame::Unknown);
+        let o: ServerMsg = serde_json::from_str(
+            r#"{"type":"observation","match_id":1,"tick":0,"observations":[]}"#,
+        )
+        .unwrap();
+        assert!(
+            matches!(o, ServerMsg::Observation(ObservationMsg { events, .. }) if events.is_empty())
+        );
+        let e: ClientMsg =
+            serde_json::from_str(r#"{"type":"end_match","token":"t","match_id":4}"#).unwrap();
+        assert_eq!(e.kind(), "end_match");
+        assert!(ClientMsg::decode(br#"{"type":"end_match","token":"t"}"#).is_err());
+    }
+
     /// Issue 15: a number too large for f32 parsed to infinity, which
     /// encodes as null; it is refused at decoding now.
     #[test]
