@@ -9,7 +9,8 @@ One row per file (the --blue team's figures, mean ± 95% CI over its
 matches, whichever colour it played with --both-sides), then one row per
 group pooling the matches of all its files: a group is the blue team's name
 without its trailing seed (`ppo:assets/policies/ppo-seed1` and
-`ppo:assets/policies/ppo-seed2` pool as `ppo:assets/policies/ppo`). Win
+`ppo:assets/policies/ppo-seed2` pool as `ppo:assets/policies/ppo`) against
+one opponent (the --red team). Win
 rates carry their Wilson score 95% interval. Standard library only.
 """
 
@@ -70,7 +71,7 @@ def per_match(result):
 def row(name, r):
     b = r["blue"]
     fmt = lambda f: f"{b[f]['mean']:.2f} ± {b[f]['ci95']:.2f}"
-    return (f"| {name} | {fmt('goals')} | {b['control_rate_percent']['mean']:.1f}% ± "
+    return (f"| {name} | {r['red']['name']} | {fmt('goals')} | {b['control_rate_percent']['mean']:.1f}% ± "
             f"{b['control_rate_percent']['ci95']:.1f} | {fmt('passes')} | {fmt('shots')} | "
             f"{b['wins']} / {b['draws']} / {b['losses']} | {fmt_rate(b['wins'], r['matches'])} | "
             f"{sides(r)} | {r['red']['goals']['mean']:.2f} |")
@@ -83,20 +84,20 @@ def main(paths):
     for p in paths:
         with open(p) as f:
             results.append((p, json.load(f)))
-    print("| team | goals / match | ball control | passes / match | shots / match "
+    print("| team | opponent | goals / match | ball control | passes / match | shots / match "
           "| W / D / L | win rate [Wilson 95%] | sides | goals conceded / match |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for _, r in results:
         print(row(r["blue"]["name"], r))
     groups = {}
     for _, r in results:
-        key = re.sub(r"[-_]?seed\d+$", "", r["blue"]["name"])
-        groups.setdefault(key, []).append(r)
+        team = re.sub(r"[-_]?seed\d+$", "", r["blue"]["name"])
+        groups.setdefault((team, r["red"]["name"]), []).append(r)
     print()
-    print("| team (runs pooled) | matches | goals / match | goals conceded / match "
+    print("| team (runs pooled) | opponent | matches | goals / match | goals conceded / match "
           "| ball control (mean of runs) | W / D / L | win rate [Wilson 95%] |")
-    print("|---|---|---|---|---|---|---|")
-    for algo, rs in groups.items():
+    print("|---|---|---|---|---|---|---|---|")
+    for (algo, opponent), rs in groups.items():
         scores = [s for r in rs for s in per_match(r)]
         gf = mean_ci([float(b) for b, _ in scores])
         ga = mean_ci([float(r_) for _, r_ in scores])
@@ -105,7 +106,7 @@ def main(paths):
         d = sum(b == r_ for b, r_ in scores)
         l_ = sum(b < r_ for b, r_ in scores)
         runs = f"{len(rs)} run{'s' if len(rs) > 1 else ''}"
-        print(f"| {algo} ({runs}) | {len(scores)} | {gf[0]:.2f} ± {gf[1]:.2f} | "
+        print(f"| {algo} ({runs}) | {opponent} | {len(scores)} | {gf[0]:.2f} ± {gf[1]:.2f} | "
               f"{ga[0]:.2f} ± {ga[1]:.2f} | {ctl[0]:.1f}% ± {ctl[1]:.1f} | {w} / {d} / {l_} | "
               f"{fmt_rate(w, len(scores))} |")
 
