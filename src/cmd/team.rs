@@ -75,6 +75,10 @@ fn check_learned(spec: &str, what: &str) -> anyhow::Result<()> {
 #[cfg(feature = "learn")]
 fn load_learned(spec: &str, seed: u64) -> anyhow::Result<Box<dyn Policy>> {
     use anyhow::Context;
+    // A forward pass of these small networks is fastest on one thread:
+    // libtorch's default OpenMP workers spin between calls, and a match
+    // that asks every tick ran at 11x real time instead of hundreds.
+    tch::set_num_threads(1);
     naosoccer_learn::load_policy_for_match(spec, seed).with_context(|| format!("loading {spec}"))
 }
 
