@@ -10,9 +10,9 @@ mod support;
 use naosoccer_client::{Client, ClientError, Push};
 use naosoccer_proto::msg::{
     ClientMsg, CreateMatch, EndReason, ErrorCode, ErrorMsg, Hello, MatchEnd, MatchId, MatchInfo,
-    MatchState, Player, PlayerAction, ServerMsg,
+    MatchState, Player, ServerMsg,
 };
-use naosoccer_proto::{frame, Action, Team};
+use naosoccer_proto::{frame, Team};
 use naosoccer_referee::Match;
 use naosoccer_server::{Hooks, MatchObserver, ServerConfig, ServerError, TickRecord};
 use std::net::SocketAddr;
@@ -21,22 +21,8 @@ use support::*;
 use tokio::net::{TcpListener, TcpSocket, TcpStream};
 use tokio::sync::oneshot;
 
-fn p(n: usize) -> Player {
-    Player::new(n).unwrap()
-}
-
 fn all_players() -> Vec<Player> {
     Player::all().collect()
-}
-
-fn stay(players: &[Player]) -> Vec<PlayerAction> {
-    players
-        .iter()
-        .map(|&player| PlayerAction {
-            player,
-            action: Action::Stay,
-        })
-        .collect()
 }
 
 async fn expect_error(c: &mut Client, code: ErrorCode, fatal: bool) -> ErrorMsg {
@@ -73,20 +59,6 @@ fn refused(r: Result<Client, ClientError>, limit: &str) {
         }
         Err(other) => panic!("expected resource_exhausted ({limit}), got {other}"),
         Ok(_) => panic!("expected resource_exhausted ({limit}), got a welcome"),
-    }
-}
-
-/// Plays the joined players with `stay` until the match ends; returns the
-/// end and the non-fatal errors pushed on the way.
-async fn play_out(c: &mut Client, players: &[Player]) -> (MatchEnd, Vec<ErrorMsg>) {
-    let actions = stay(players);
-    let mut errors = Vec::new();
-    loop {
-        match c.next_push().await.unwrap() {
-            Push::Observation(o) => c.send_actions(o.tick, &actions).await.unwrap(),
-            Push::MatchEnd(end) => return (end, errors),
-            Push::Error(e) => errors.push(e),
-        }
     }
 }
 

@@ -9,41 +9,10 @@
 mod support;
 
 use naosoccer_client::{Client, Push};
-use naosoccer_proto::msg::{
-    ActionMsg, ClientMsg, CreateMatch, EndReason, ErrorCode, ErrorMsg, MatchEnd, MatchId, Player,
-    PlayerAction,
-};
-use naosoccer_proto::{Action, Team};
+use naosoccer_proto::msg::{ActionMsg, ClientMsg, CreateMatch, EndReason, ErrorCode, MatchId};
+use naosoccer_proto::Team;
 use std::sync::{Arc, Mutex};
 use support::*;
-
-fn p(n: usize) -> Player {
-    Player::new(n).unwrap()
-}
-
-fn stay(players: &[Player]) -> Vec<PlayerAction> {
-    players
-        .iter()
-        .map(|&player| PlayerAction {
-            player,
-            action: Action::Stay,
-        })
-        .collect()
-}
-
-/// Plays the joined players with `stay` until the match ends; returns the
-/// end and the non-fatal errors pushed on the way.
-async fn play_out(c: &mut Client, players: &[Player]) -> (MatchEnd, Vec<ErrorMsg>) {
-    let actions = stay(players);
-    let mut errors = Vec::new();
-    loop {
-        match c.next_push().await.unwrap() {
-            Push::Observation(o) => c.send_actions(o.tick, &actions).await.unwrap(),
-            Push::MatchEnd(end) => return (end, errors),
-            Push::Error(e) => errors.push(e),
-        }
-    }
-}
 
 /// Team tokens are bound to their team and cannot create matches; no token
 /// (right or guessed) appears in any error message or log line.

@@ -2,8 +2,10 @@
 //! server on 127.0.0.1:0 and the in-process reference match.
 #![allow(dead_code)]
 
-use naosoccer_client::PolicyKind;
+use naosoccer_client::{Client, PolicyKind, Push};
 use naosoccer_proto::msg::Score;
+use naosoccer_proto::msg::{ErrorMsg, MatchEnd, Player, PlayerAction};
+use naosoccer_proto::Action;
 use naosoccer_proto::MatchStats;
 use naosoccer_referee::MatchConfig;
 use naosoccer_server::{ServerConfig, ServerError, TokenConfig};
@@ -82,4 +84,34 @@ pub fn in_process(
         out.ticks,
         format!("{:016x}", out.state_hash),
     )
+}
+
+/// Player `n` of a team.
+pub fn p(n: usize) -> Player {
+    Player::new(n).unwrap()
+}
+
+/// `stay` for each of `players`.
+pub fn stay(players: &[Player]) -> Vec<PlayerAction> {
+    players
+        .iter()
+        .map(|&player| PlayerAction {
+            player,
+            action: Action::Stay,
+        })
+        .collect()
+}
+
+/// Plays the joined players with `stay` until the match ends; returns the
+/// end and the non-fatal errors pushed on the way.
+pub async fn play_out(c: &mut Client, players: &[Player]) -> (MatchEnd, Vec<ErrorMsg>) {
+    let actions = stay(players);
+    let mut errors = Vec::new();
+    loop {
+        match c.next_push().await.unwrap() {
+            Push::Observation(o) => c.send_actions(o.tick, &actions).await.unwrap(),
+            Push::MatchEnd(end) => return (end, errors),
+            Push::Error(e) => errors.push(e),
+        }
+    }
 }
