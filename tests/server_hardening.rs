@@ -216,11 +216,7 @@ async fn client_that_stops_reading_is_dropped_and_others_play_on() {
         .await
         .unwrap();
     // A well-behaved robot client in the same match.
-    let mut keeper = Client::connect(server.addr(), "keeper").await.unwrap();
-    keeper
-        .join(Some(MatchId(1)), Team::Red, RED, &[p(0)])
-        .await
-        .unwrap();
+    let mut keeper = join_robot(&server, "keeper", Team::Red, RED, p(0)).await;
     let keeper = tokio::spawn(async move { play_out(&mut keeper, &[p(0)]).await });
 
     let mut admin = Client::connect(server.addr(), "admin").await.unwrap();
@@ -322,16 +318,8 @@ async fn reconnecting_robot_client_takes_its_robot_back() {
     cfg.start_players = 2;
     cfg.deadline_ms = 60_000;
     let server = start(cfg).await;
-    let mut keeper = Client::connect(server.addr(), "keeper").await.unwrap();
-    keeper
-        .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(1)])
-        .await
-        .unwrap();
-    let mut first = Client::connect(server.addr(), "robot-0").await.unwrap();
-    first
-        .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
-        .await
-        .unwrap();
+    let mut keeper = join_robot(&server, "keeper", Team::Blue, BLUE, p(1)).await;
+    let mut first = join_robot(&server, "robot-0", Team::Blue, BLUE, p(0)).await;
     for tick in 0..5u64 {
         for (c, pl) in [(&mut keeper, p(1)), (&mut first, p(0))] {
             match c.next_push().await.unwrap() {
@@ -394,16 +382,8 @@ async fn rejoining_robot_is_not_sent_a_tick_it_already_answered() {
     cfg.start_players = 2;
     cfg.deadline_ms = 600_000;
     let server = start(cfg).await;
-    let mut keeper = Client::connect(server.addr(), "keeper").await.unwrap();
-    keeper
-        .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(1)])
-        .await
-        .unwrap();
-    let mut first = Client::connect(server.addr(), "robot-0").await.unwrap();
-    first
-        .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
-        .await
-        .unwrap();
+    let mut keeper = join_robot(&server, "keeper", Team::Blue, BLUE, p(1)).await;
+    let mut first = join_robot(&server, "robot-0", Team::Blue, BLUE, p(0)).await;
     for c in [&mut keeper, &mut first] {
         assert!(matches!(c.next_push().await.unwrap(), Push::Observation(o) if o.tick == 0));
     }
@@ -462,16 +442,8 @@ async fn left_robots_count_no_misses_and_a_finished_match_has_no_takers() {
     cfg.start_players = 2;
     cfg.deadline_ms = 600_000;
     let server = start(cfg).await;
-    let mut leaver = Client::connect(server.addr(), "leaver").await.unwrap();
-    leaver
-        .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
-        .await
-        .unwrap();
-    let mut stayer = Client::connect(server.addr(), "stayer").await.unwrap();
-    stayer
-        .join(Some(MatchId(1)), Team::Red, RED, &[p(0)])
-        .await
-        .unwrap();
+    let mut leaver = join_robot(&server, "leaver", Team::Blue, BLUE, p(0)).await;
+    let mut stayer = join_robot(&server, "stayer", Team::Red, RED, p(0)).await;
     let stayer = tokio::spawn(async move {
         let out = play_out(&mut stayer, &[p(0)]).await;
         (stayer, out)

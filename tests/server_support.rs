@@ -115,3 +115,23 @@ pub async fn play_out(c: &mut Client, players: &[Player]) -> (MatchEnd, Vec<Erro
         }
     }
 }
+
+/// A client named `name` that joined match 1 for `player` of `team`.
+pub async fn join_robot(
+    server: &TestServer,
+    name: &str,
+    team: naosoccer_proto::Team,
+    token: &str,
+    player: Player,
+) -> Client {
+    let mut c = Client::connect(server.addr(), name).await.unwrap();
+    c.join(
+        Some(naosoccer_proto::msg::MatchId(1)),
+        team,
+        token,
+        &[player],
+    )
+    .await
+    .unwrap();
+    c
+}
