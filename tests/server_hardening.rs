@@ -300,6 +300,17 @@ async fn client_that_stops_reading_is_dropped_and_others_play_on() {
     assert_eq!(end.misses.red[0], 0, "the keeper was never kept waiting");
 }
 
+/// Polls match 1 until blue player 0's slot is free again (the server has
+/// noticed its client's disconnect).
+async fn wait_until_blue_0_is_free(c: &mut Client) {
+    for _ in 0..10_000 {
+        if !match_info(c, MatchId(1)).await.taken.blue[0] {
+            return;
+        }
+    }
+    panic!("the disconnected client's slot never became free");
+}
+
 async fn match_info(c: &mut Client, id: MatchId) -> MatchInfo {
     c.list_matches()
         .await
@@ -337,14 +348,7 @@ async fn reconnecting_robot_client_takes_its_robot_back() {
     let mut again = Client::connect(server.addr(), "robot-0 again")
         .await
         .unwrap();
-    let mut freed = false;
-    for _ in 0..10_000 {
-        if !match_info(&mut again, MatchId(1)).await.taken.blue[0] {
-            freed = true;
-            break;
-        }
-    }
-    assert!(freed, "the disconnected client's slot never became free");
+    wait_until_blue_0_is_free(&mut again).await;
     let joined = again
         .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
         .await
@@ -394,14 +398,7 @@ async fn rejoining_robot_is_not_sent_a_tick_it_already_answered() {
     let mut again = Client::connect(server.addr(), "robot-0 again")
         .await
         .unwrap();
-    let mut freed = false;
-    for _ in 0..10_000 {
-        if !match_info(&mut again, MatchId(1)).await.taken.blue[0] {
-            freed = true;
-            break;
-        }
-    }
-    assert!(freed, "the disconnected client's slot never became free");
+    wait_until_blue_0_is_free(&mut again).await;
     let joined = again
         .join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
         .await
