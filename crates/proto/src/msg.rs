@@ -276,11 +276,6 @@ pub struct CreateMatch {
     /// Lockstep: how long a tick waits for actions, in milliseconds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub deadline_ms: Option<u64>,
-    /// Fault injection for the server's own tests: the match task panics
-    /// when it reaches this tick. Refused unless the server enables it.
-    #[doc(hidden)]
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub panic_at_tick: Option<u64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
