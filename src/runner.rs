@@ -9,14 +9,9 @@ use std::time::Instant;
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::{Action, Event, MatchStats, Observation, RobotId, ROBOTS};
 use naosoccer_referee::{blank_observation, Match, MatchConfig, MatchError};
-use serde::Serialize;
 
-/// Goals of each team.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct Score {
-    pub blue: u32,
-    pub red: u32,
-}
+/// Goals of each team (the protocol's `score`, one shape everywhere).
+pub use naosoccer_proto::Score;
 
 /// What a finished match reports.
 #[derive(Debug, Clone, PartialEq)]
@@ -113,13 +108,12 @@ pub fn run_to_end_with(
         on_tick(&m, &actions, &tick_events);
     }
     let wall_seconds = start.elapsed().as_secs_f64();
-    let (blue, red) = m.score();
     MatchOutcome {
         seed: m.seed(),
         ticks: m.tick(),
         sim_seconds: m.sim_seconds(),
         wall_seconds,
-        score: Score { blue, red },
+        score: m.goals(),
         stats: m.stats(),
         state_hash: m.state_hash(),
         events,

@@ -2,12 +2,13 @@
 //! (scripted, random, idle) and, over the socket protocol, the client library
 //! and the robot client loop.
 //!
-//! - [`framed`]: frames over tokio streams (the server uses it too).
+//! - [`framed`]: frames over tokio streams (`naosoccer_proto::framed`,
+//!   re-exported: the server reads and writes through it too).
 //! - [`net`]: [`Client`], one connection: handshake, requests, the
 //!   observation/action loop over a [`Policy`].
 //! - [`robot`]: one team's players as robot connections or one team connection.
 
-pub mod framed;
+pub use naosoccer_proto::framed;
 pub mod net;
 pub mod policy;
 pub mod robot;

@@ -1,9 +1,9 @@
 //! The protocol client: connect and handshake, requests with their replies,
 //! and the per-tick observation/action loop over a [`Policy`].
 
-use crate::framed::{FrameReader, FrameWriter, WireError};
 use crate::policy::Policy;
 use naosoccer_proto::frame::DEFAULT_MAX_FRAME;
+use naosoccer_proto::framed::{FrameReader, FrameWriter, WireError};
 use naosoccer_proto::msg::{
     ActionRef, ClientMsg, CreateMatch, EndMatch, ErrorCode, ErrorMsg, Hello, Join, Joined, Leave,
     ListMatches, MatchEnd, MatchId, MatchInfo, ObservationMsg, Ping, Player, PlayerAction,

@@ -140,8 +140,7 @@ pub async fn play_connection(
         .join(run.match_id, run.team, &run.token, &players)
         .await?;
     tracing::info!(match_id = %joined.match_id, team = %run.team, ?players, "joined");
-    let robot =
-        |p: &Player| RobotId::new(run.team, p.index()).expect("player numbers are validated");
+    let robot = |p: &Player| RobotId::of(run.team, *p);
     let mut policies: Vec<Box<dyn Policy>> = match &run.policy {
         TeamPolicy::Builtin(kind) => joined
             .players

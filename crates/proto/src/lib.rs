@@ -1,10 +1,14 @@
 //! Wire types shared by the referee (which builds observations and events),
-//! the server and the clients. Serde only: no IO, no physics.
+//! the server and the clients. Serde only, no IO and no physics, except
+//! [`framed`] (feature `tokio`): frames over tokio streams for the server and
+//! the client library.
 //!
 //! Everything a player sees is expressed in its team's frame: the team always
 //! attacks +x, its own goal is at x = -field_length/2.
 
 pub mod frame;
+#[cfg(feature = "tokio")]
+pub mod framed;
 pub mod msg;
 pub mod types;
 

@@ -13,6 +13,9 @@
 //! can answer it (server) or skip it (client) instead of failing.
 
 use crate::types::{Action, Event, MatchStats, Observation, Team, PLAYERS_PER_TEAM};
+// Defined beside the other ids and per-team types; named here too, where
+// the messages that carry them are.
+pub use crate::types::{PerTeam, Player, Score};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -41,49 +44,6 @@ impl fmt::Display for Version {
 pub struct MatchId(pub u64);
 
 impl fmt::Display for MatchId {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.0)
-    }
-}
-
-/// A player number within a team, 0..=3; validated when deserialised.
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-#[serde(try_from = "u8", into = "u8")]
-pub struct Player(u8);
-
-impl Player {
-    pub fn new(n: usize) -> Option<Player> {
-        (n < PLAYERS_PER_TEAM).then_some(Player(n as u8))
-    }
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-    pub fn all() -> impl Iterator<Item = Player> {
-        (0..PLAYERS_PER_TEAM as u8).map(Player)
-    }
-}
-
-impl TryFrom<u8> for Player {
-    type Error = String;
-    fn try_from(v: u8) -> Result<Self, Self::Error> {
-        Player::new(v as usize)
-            .ok_or_else(|| format!("player {v} out of range 0..{PLAYERS_PER_TEAM}"))
-    }
-}
-
-impl From<Player> for u8 {
-    fn from(p: Player) -> u8 {
-        p.0
-    }
-}
-
-impl fmt::Debug for Player {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.0)
-    }
-}
-
-impl fmt::Display for Player {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}", self.0)
     }
@@ -147,31 +107,6 @@ impl std::str::FromStr for Fill {
         }
     }
 }
-
-/// One value per team.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-pub struct PerTeam<T> {
-    pub blue: T,
-    pub red: T,
-}
-
-impl<T> PerTeam<T> {
-    pub fn get(&self, team: Team) -> &T {
-        match team {
-            Team::Blue => &self.blue,
-            Team::Red => &self.red,
-        }
-    }
-    pub fn get_mut(&mut self, team: Team) -> &mut T {
-        match team {
-            Team::Blue => &mut self.blue,
-            Team::Red => &mut self.red,
-        }
-    }
-}
-
-/// Goals per team, in world terms (not mirrored).
-pub type Score = PerTeam<u32>;
 
 // ---------------------------------------------------------------- client to server
 
@@ -341,11 +276,6 @@ pub struct CreateMatch {
     /// Lockstep: how long a tick waits for actions, in milliseconds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub deadline_ms: Option<u64>,
-    /// Fault injection for the server's own tests: the match task panics
-    /// when it reaches this tick. Refused unless the server enables it.
-    #[doc(hidden)]
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub panic_at_tick: Option<u64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -820,7 +750,7 @@ mod tests {
         assert_eq!(back, owned);
 
         let actions = vec![PlayerAction {
-            player: Player(2),
+            player: Player::new(2).unwrap(),
             action: Action::TurnLeft,
         }];
         let owned = ClientMsg::Action(ActionMsg {

@@ -109,6 +109,83 @@ impl From<RobotId> for u8 {
     }
 }
 
+/// A player number within a team, 0..=3; validated when deserialised.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(try_from = "u8", into = "u8")]
+pub struct Player(u8);
+
+impl Player {
+    pub fn new(n: usize) -> Option<Player> {
+        (n < PLAYERS_PER_TEAM).then_some(Player(n as u8))
+    }
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+    pub fn all() -> impl Iterator<Item = Player> {
+        (0..PLAYERS_PER_TEAM as u8).map(Player)
+    }
+}
+
+impl TryFrom<u8> for Player {
+    type Error = String;
+    fn try_from(v: u8) -> Result<Self, Self::Error> {
+        Player::new(v as usize)
+            .ok_or_else(|| format!("player {v} out of range 0..{PLAYERS_PER_TEAM}"))
+    }
+}
+
+impl From<Player> for u8 {
+    fn from(p: Player) -> u8 {
+        p.0
+    }
+}
+
+impl fmt::Debug for Player {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+impl fmt::Display for Player {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+impl RobotId {
+    /// A team's player: always a robot on the pitch.
+    pub fn of(team: Team, player: Player) -> RobotId {
+        RobotId((team.index() * PLAYERS_PER_TEAM + player.index()) as u8)
+    }
+
+    /// The player number within its team.
+    pub fn player_id(self) -> Player {
+        Player(self.0 % PLAYERS_PER_TEAM as u8)
+    }
+}
+
+/// One value per team.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub struct PerTeam<T> {
+    pub blue: T,
+    pub red: T,
+}
+
+impl<T> PerTeam<T> {
+    pub fn get(&self, team: Team) -> &T {
+        match team {
+            Team::Blue => &self.blue,
+            Team::Red => &self.red,
+        }
+    }
+    pub fn get_mut(&mut self, team: Team) -> &mut T {
+        match team {
+            Team::Blue => &mut self.blue,
+            Team::Red => &mut self.red,
+        }
+    }
+}
+
 /// The paper's five actions. One holds for one control tick.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, Default,
@@ -409,24 +486,18 @@ pub struct TeamStats {
     pub corner_kicks: u32,
 }
 
+/// Goals per team, in world terms (not mirrored).
+pub type Score = PerTeam<u32>;
+
 /// Both teams' statistics.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
-pub struct MatchStats {
-    pub blue: TeamStats,
-    pub red: TeamStats,
-}
+pub type MatchStats = PerTeam<TeamStats>;
 
 impl MatchStats {
+    /// [`PerTeam::get`] under the name statistics have always used.
     pub fn team(&self, team: Team) -> &TeamStats {
-        match team {
-            Team::Blue => &self.blue,
-            Team::Red => &self.red,
-        }
+        self.get(team)
     }
     pub fn team_mut(&mut self, team: Team) -> &mut TeamStats {
-        match team {
-            Team::Blue => &mut self.blue,
-            Team::Red => &mut self.red,
-        }
+        self.get_mut(team)
     }
 }

@@ -2,10 +2,10 @@
 //! run the rules, apply their commands, keep score and statistics.
 
 use naosoccer_proto::{
-    Action, Event, MatchStats, Observation, RobotId, SetPlayKind, SetPlayObs, Team,
+    Action, Event, MatchStats, Observation, RobotId, Score, SetPlayKind, SetPlayObs, Team,
     PLAYERS_PER_TEAM, ROBOTS,
 };
-use naosoccer_sim::{Command as SimCommand, RobotModel, Sim, SimError};
+use naosoccer_sim::{Command as SimCommand, RobotModel, Sim, SimError, StateHasher};
 
 use crate::config::{ConfigError, MatchConfig, RewardConfig};
 use crate::observe::{self, ObsContext};
@@ -46,7 +46,7 @@ pub struct Match {
     announce_start: bool,
     controller: Option<RobotId>,
     /// Goals, indexed by `Team::index`.
-    score: [u32; 2],
+    score: Score,
     stats: MatchStats,
     /// The team that scored during the last tick (for the reward).
     last_goal: Option<Team>,
@@ -93,7 +93,7 @@ impl Match {
             finished: false,
             announce_start: true,
             controller: None,
-            score: [0; 2],
+            score: Score::default(),
             stats: MatchStats::default(),
             last_goal: None,
             shaping: [0.0; ROBOTS],
@@ -237,7 +237,7 @@ impl Match {
         let out = &mut self.outcome;
         let scored = self.goal.check(snap, tick, out);
         if let Some(team) = scored {
-            self.score[team.index()] += 1;
+            *self.score.get_mut(team) += 1;
             self.last_goal = Some(team);
         }
         let ball_replaced =
@@ -402,9 +402,15 @@ impl Match {
         self.steps_per_tick
     }
 
-    /// (blue, red) goals.
+    /// Goals per team.
+    pub fn goals(&self) -> Score {
+        self.score
+    }
+
+    /// [`goals`](Self::goals) as a `(blue, red)` pair, for callers that
+    /// destructure it.
     pub fn score(&self) -> (u32, u32) {
-        (self.score[0], self.score[1])
+        (self.score.blue, self.score.red)
     }
 
     /// Statistics so far; control rates are shares of the ticks in which any
@@ -422,19 +428,19 @@ impl Match {
     /// The sim's state hash mixed with the referee's state (clock, score,
     /// possession, falls, pass chain): equal hashes mean equal matches.
     pub fn state_hash(&self) -> u64 {
-        let mut h = Fnv::new();
-        h.write(self.sim.state_hash());
-        h.write(self.tick);
-        h.write(u64::from(self.finished));
-        h.write(u64::from(self.score[0]));
-        h.write(u64::from(self.score[1]));
-        h.write(self.controller.map_or(u64::MAX, |c| c.index() as u64));
+        let mut h = StateHasher::new();
+        h.u64(self.sim.state_hash());
+        h.u64(self.tick);
+        h.u64(u64::from(self.finished));
+        h.u64(u64::from(self.score.blue));
+        h.u64(u64::from(self.score.red));
+        h.u64(self.controller.map_or(u64::MAX, |c| c.index() as u64));
         for i in 0..ROBOTS {
-            h.write(self.fall.up_at(i).unwrap_or(u64::MAX));
+            h.u64(self.fall.up_at(i).unwrap_or(u64::MAX));
         }
-        h.write(self.pass.fingerprint());
-        h.write(self.set_play.fingerprint());
-        h.write(self.kickoff.first().index() as u64);
+        h.u64(self.pass.fingerprint());
+        h.u64(self.set_play.fingerprint());
+        h.u64(self.kickoff.first().index() as u64);
         h.finish()
     }
 
@@ -584,24 +590,6 @@ fn apply_stats(stats: &mut MatchStats, e: &Event) {
             }
         }
         _ => {}
-    }
-}
-
-/// FNV-1a over 64-bit words: a fixed, platform-independent mix.
-struct Fnv(u64);
-
-impl Fnv {
-    fn new() -> Fnv {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-    fn write(&mut self, v: u64) {
-        for b in v.to_le_bytes() {
-            self.0 ^= u64::from(b);
-            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    fn finish(&self) -> u64 {
-        self.0
     }
 }
 

@@ -4,7 +4,8 @@
 use std::f32::consts::PI;
 
 use naosoccer_proto::{
-    BallObs, Observation, RobotId, RobotObs, ScoreObs, SetPlayObs, Team, PLAYERS_PER_TEAM, ROBOTS,
+    BallObs, Observation, RobotId, RobotObs, Score, ScoreObs, SetPlayObs, Team, PLAYERS_PER_TEAM,
+    ROBOTS,
 };
 use naosoccer_sim::Snapshot;
 
@@ -15,7 +16,7 @@ pub(crate) struct ObsContext<'a> {
     pub tick: u64,
     pub time_left: f32,
     /// Goals, indexed by `Team::index`.
-    pub score: [u32; 2],
+    pub score: Score,
     pub down: &'a [bool; ROBOTS],
     pub controller: Option<RobotId>,
     pub half: u8,
@@ -53,8 +54,8 @@ pub(crate) fn fill(
     out.player = (player % PLAYERS_PER_TEAM) as u8;
     out.time_left = ctx.time_left;
     out.score = ScoreObs {
-        own: ctx.score[team.index()],
-        opponent: ctx.score[team.other().index()],
+        own: *ctx.score.get(team),
+        opponent: *ctx.score.get(team.other()),
     };
     for p in 0..PLAYERS_PER_TEAM {
         out.own[p] = robot_obs(own_base + p);

@@ -1,10 +1,11 @@
 //! The server's configuration: one TOML file, every field optional.
 
 use naosoccer_proto::frame::DEFAULT_MAX_FRAME;
-use naosoccer_proto::msg::{Fill, Mode};
+use naosoccer_proto::msg::{Fill, MatchId, Mode};
 use naosoccer_proto::Team;
 use naosoccer_referee::MatchConfig;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Server settings. The match itself (pitch, rules, length) comes from a
@@ -51,6 +52,12 @@ pub struct ServerConfig {
     /// The resolved match configuration (from `match_config` and `minutes`).
     #[serde(skip)]
     pub match_cfg: MatchConfig,
+    /// Fault injection for the server's own tests, set in code only (not in
+    /// the file, not on the wire): the match with this id panics when it
+    /// reaches this tick.
+    #[doc(hidden)]
+    #[serde(skip)]
+    pub panic_at: BTreeMap<MatchId, u64>,
 }
 
 /// Per-connection limits and deadlines: what one peer may cost the server.
@@ -86,9 +93,6 @@ pub struct Limits {
     /// TCP keepalive idle time in seconds (0: off), so dead peers whose
     /// machine vanished are noticed by the kernel.
     pub keepalive_s: u64,
-    /// Test-only: honour `create_match`'s fault-injection fields.
-    #[doc(hidden)]
-    pub fault_injection: bool,
 }
 
 impl Default for Limits {
@@ -106,7 +110,6 @@ impl Default for Limits {
             write_timeout_ms: 10_000,
             max_outbound: 64,
             keepalive_s: 60,
-            fault_injection: false,
         }
     }
 }
@@ -167,6 +170,13 @@ impl Tokens {
     }
 }
 
+/// Token comparison whose time does not depend on the tokens' contents
+/// (`subtle`'s constant-time equality; only a length difference shows).
+pub(crate) fn token_eq(given: &str, expected: &str) -> bool {
+    use subtle::ConstantTimeEq;
+    given.as_bytes().ct_eq(expected.as_bytes()).into()
+}
+
 impl Default for ServerConfig {
     fn default() -> Self {
         ServerConfig {
@@ -187,6 +197,7 @@ impl Default for ServerConfig {
             tokens: TokenConfig::default(),
             record_dir: None,
             match_cfg: MatchConfig::default(),
+            panic_at: BTreeMap::new(),
         }
     }
 }
@@ -298,6 +309,14 @@ fn random_token() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn token_eq_compares_whole_tokens() {
+        assert!(token_eq("blue-secret", "blue-secret"));
+        assert!(!token_eq("blue-secreT", "blue-secret"));
+        assert!(!token_eq("blue-secret", "blue-secret-2"));
+        assert!(!token_eq("", "blue-secret"));
+    }
 
     #[test]
     fn partial_file_and_tokens() {

@@ -2,13 +2,18 @@
 //! schedulers, many matches at once.
 //!
 //! Layout (after tokio-rs/mini-redis):
-//! - [`run`] / [`run_with`]: accept loop, connection limit, graceful shutdown
-//!   (a future passed in; the server waits until every task is done).
-//! - `connection`: one task per client; frames (via
-//!   `naosoccer_client::framed`), requests and replies, in order.
+//! - [`run`] / [`run_with`] (`server`): accept loop, connection limits,
+//!   graceful shutdown (a future passed in; the server waits until every
+//!   task is done).
+//! - `shared`: what every connection shares; the match registry.
+//! - `handler`: one task per client connection, its read loop and deadlines.
+//! - `connection`: frames in and out (`naosoccer_proto::framed`), nothing else.
+//! - `session`: one client's state (greeting, seat in a match, rate bucket).
+//! - `cmd`: one handler per request kind.
+//! - `limits`: the byte-counting reader and the message-rate bucket.
 //! - `match_task`: one task per match owns its `referee::Match`; joins,
-//!   leaves and actions arrive over a channel, observations leave over one
-//!   per connection.
+//!   leaves and actions arrive over a channel (`match_msg`), observations
+//!   leave over one per connection.
 //! - [`observer`]: the per-match hook a recorder plugs into.
 //!
 //! The wire protocol is in `naosoccer_proto::msg` and docs/PROTOCOL.md.
@@ -20,12 +25,18 @@
 //! 27 us a round trip on the 2-core machine we measured: a quarter of the
 //! tick again, for every tick of every match.
 
+mod cmd;
 pub mod config;
 mod connection;
+mod handler;
+mod limits;
+mod match_msg;
 mod match_task;
 pub mod observer;
 pub mod recording;
 mod server;
+mod session;
+mod shared;
 
 pub use config::Limits;
 pub use config::{ConfigError, ServerConfig, TokenConfig, Tokens};

@@ -10,66 +10,23 @@
 //! miss. Slots no client ever joined are played by the fill policy; a robot
 //! whose client left stands.
 
+mod commands;
+mod end;
+mod info;
+
+use crate::match_msg::{send_observation, ConnEntry, ConnId, MatchCmd};
 use crate::observer::{MatchObserver, TickRecord};
 use naosoccer_client::{Policy, PolicyKind};
-use naosoccer_proto::msg::{
-    EndReason, ErrorCode, ErrorMsg, Fill, Frame, Joined, MatchEnd, MatchId, MatchInfo, MatchState,
-    Mode, PerTeam, Pitch, Player, Score,
-};
-use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Fill, MatchId, MatchInfo, MatchState, Mode};
+use naosoccer_proto::{Action, Event, Observation, RobotId, Team, ROBOTS};
 use naosoccer_referee::Match;
+use std::future::Future;
+use std::pin::Pin;
 use std::sync::Arc;
+use std::task::{Context, Poll};
 use std::time::Duration;
 use tokio::sync::{mpsc, oneshot, watch};
-use tokio::time::Instant;
-
-pub(crate) type ConnId = u64;
-
-/// A connection the match dropped because its queue was full: it learns why
-/// through this (its queue has no room for the news).
-pub(crate) type Kick = oneshot::Sender<ErrorMsg>;
-
-/// From a match task to one connection. Observations, the common case, are
-/// inline so that a tick allocates nothing.
-#[derive(Debug)]
-#[allow(clippy::large_enum_variant)]
-pub(crate) enum Outgoing {
-    Observation {
-        match_id: MatchId,
-        tick: u64,
-        len: u8,
-        obs: [Observation; PLAYERS_PER_TEAM],
-        /// The events of the tick that led here, shared by every connection.
-        events: Arc<Vec<Event>>,
-    },
-    MatchEnd(MatchEnd),
-    Error(ErrorMsg),
-}
-
-/// From a connection to a match task.
-#[derive(Debug)]
-pub(crate) enum MatchCmd {
-    Join {
-        conn: ConnId,
-        team: Team,
-        players: Vec<Player>,
-        out: mpsc::Sender<Outgoing>,
-        kick: Kick,
-        reply: oneshot::Sender<Result<Joined, ErrorMsg>>,
-    },
-    /// The connection left or closed; its robots stand from now on.
-    Leave { conn: ConnId },
-    /// End the match now (`end_match`): its clients get their `match_end`,
-    /// then the reply carries the final description.
-    End { reply: oneshot::Sender<MatchInfo> },
-    /// Validated by the connection: only players it controls.
-    Action {
-        conn: ConnId,
-        team: Team,
-        tick: u64,
-        actions: [Option<Action>; PLAYERS_PER_TEAM],
-    },
-}
+use tokio::time::{Instant, Sleep};
 
 /// Per-match settings, resolved from the server config and `create_match`.
 #[derive(Debug, Clone)]
@@ -93,16 +50,6 @@ enum Slot {
     Client(ConnId),
     /// Its client left: the robot stands.
     Vacated,
-}
-
-struct ConnEntry {
-    id: ConnId,
-    team: Team,
-    players: Vec<Player>,
-    /// Bounded (`limits.max_outbound`): a connection whose queue is full is
-    /// not reading and is dropped rather than buffered for or waited on.
-    out: mpsc::Sender<Outgoing>,
-    kick: Option<Kick>,
 }
 
 pub(crate) struct MatchTask {
@@ -181,103 +128,17 @@ impl MatchTask {
         }
     }
 
-    /// The first `MatchInfo` of a match (before its task runs).
-    pub(crate) fn initial_info(params: &MatchParams, game: &Match) -> MatchInfo {
-        MatchInfo {
-            match_id: params.id,
-            state: MatchState::Waiting,
-            mode: params.mode,
-            fill: params.fill,
-            seed: params.seed,
-            control_hz: game.config().control_hz,
-            tick: game.tick(),
-            total_ticks: game.total_ticks(),
-            deadline_ms: params.deadline.as_millis() as u64,
-            start_players: params.start_players,
-            score: Score::default(),
-            taken: PerTeam::default(),
-        }
-    }
-
     pub(crate) async fn run(mut self) {
         let id = self.params.id;
         tracing::info!(match_id = %id, seed = self.params.seed, mode = %self.params.mode, "match created");
         let stop = self.play().await;
-        let reason = match stop {
-            Stop::Finished => EndReason::Finished,
-            Stop::Shutdown => EndReason::Shutdown,
-            Stop::Panicked => EndReason::Internal,
-            Stop::Ended => EndReason::Ended,
-        };
-        let (blue, red) = self.game.score();
-        let end = MatchEnd {
-            match_id: id,
-            reason,
-            tick: self.game.tick(),
-            score: Score { blue, red },
-            stats: self.game.stats(),
-            misses: self.misses_per_team(),
-            rewards: PerTeam {
-                blue: self.game.rewards(Team::Blue),
-                red: self.game.rewards(Team::Red),
-            },
-            events: self.unsent_events(reason),
-            state_hash: format!("{:016x}", self.game.state_hash()),
-        };
-        if reason == EndReason::Internal {
-            tracing::error!(match_id = %id, tick = end.tick, "match task panicked; ending the match");
-            let e = ErrorMsg::new(
-                ErrorCode::Internal,
-                format!("match {id} failed inside the server at tick {}; it has ended (the server goes on)", end.tick),
-            );
-            for c in &self.conns {
-                deliver(&c.out, Outgoing::Error(e.clone()));
-            }
-        }
-        tracing::info!(
-            match_id = %id,
-            ?reason,
-            ticks = end.tick,
-            blue = blue,
-            red = red,
-            misses = ?self.misses,
-            lateness_p99_us = percentile(&mut self.lateness_us, 0.99),
-            "match ended: blue {blue} - {red} red"
-        );
-        if let Some(o) = &mut self.observer {
-            // An observer that panicked mid-tick may panic again here; the
-            // clients still get their match_end.
-            let finish = std::panic::AssertUnwindSafe(|| o.on_end(&end, &self.game));
-            if std::panic::catch_unwind(finish).is_err() {
-                tracing::error!(match_id = %id, "the match observer panicked in on_end");
-            }
-        }
-        // Finished before anyone hears of it, so a client that lists matches
-        // right after its match_end sees it finished.
-        self.info.send_modify(|i| {
-            i.state = MatchState::Finished;
-            i.taken = PerTeam::default();
-        });
-        for c in self.conns.drain(..) {
-            deliver(&c.out, Outgoing::MatchEnd(end.clone()));
-        }
-        if let Some(reply) = self.ended_by.take() {
-            let _ = reply.send(self.info.borrow().clone());
-        }
+        self.finish(stop);
     }
 
     async fn play(&mut self) -> Stop {
-        while self.joined_robots() < self.params.start_players as usize {
-            tokio::select! {
-                biased;
-                _ = self.shutdown.changed() => return Stop::Shutdown,
-                cmd = self.rx.recv() => match cmd {
-                    Some(cmd) => if let Some(stop) = self.handle(cmd) {
-                        return stop;
-                    },
-                    None => return Stop::Shutdown,
-                },
-            }
+        let start = self.params.start_players as usize;
+        if let Err(stop) = self.serve(None, |t| t.joined_robots() < start).await {
+            return stop;
         }
         self.info.send_modify(|i| i.state = MatchState::Running);
         tracing::info!(match_id = %self.params.id, "match started");
@@ -290,6 +151,59 @@ impl MatchTask {
         }
     }
 
+    /// Applies commands while `waiting` holds and, if there is one, until the
+    /// timer fires; `Err` when the match must stop (shutdown, every sender
+    /// gone, `end_match`). The one place the task waits for commands.
+    ///
+    /// A shutdown comes first. A lockstep deadline comes after the commands
+    /// already queued, so an action that arrived in time counts; a real-time
+    /// tick comes before them, so the tick starts on time whatever is queued
+    /// (what arrived late applies at the next tick).
+    async fn serve(
+        &mut self,
+        mut timer: Option<(Pin<&mut Sleep>, Mode)>,
+        waiting: impl Fn(&Self) -> bool,
+    ) -> Result<(), Stop> {
+        enum Wake {
+            Shutdown,
+            Timer,
+            Cmd(Option<MatchCmd>),
+        }
+        while waiting(self) {
+            let wake = {
+                let changed = self.shutdown.changed();
+                tokio::pin!(changed);
+                let rx = &mut self.rx;
+                std::future::poll_fn(|cx| {
+                    if changed.as_mut().poll(cx).is_ready() {
+                        return Poll::Ready(Wake::Shutdown);
+                    }
+                    if fired(&mut timer, true, cx) {
+                        return Poll::Ready(Wake::Timer);
+                    }
+                    if let Poll::Ready(cmd) = rx.poll_recv(cx) {
+                        return Poll::Ready(Wake::Cmd(cmd));
+                    }
+                    if fired(&mut timer, false, cx) {
+                        return Poll::Ready(Wake::Timer);
+                    }
+                    Poll::Pending
+                })
+                .await
+            };
+            match wake {
+                Wake::Shutdown | Wake::Cmd(None) => return Err(Stop::Shutdown),
+                Wake::Timer => return Ok(()),
+                Wake::Cmd(Some(cmd)) => {
+                    if let Some(stop) = self.handle(cmd) {
+                        return Err(stop);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     async fn lockstep(&mut self) -> Stop {
         while !self.game.is_finished() {
             let tick = self.game.tick();
@@ -298,18 +212,9 @@ impl MatchTask {
             self.send_observations(tick);
             let deadline = tokio::time::sleep(self.params.deadline);
             tokio::pin!(deadline);
-            while self.waiting_for_clients() {
-                tokio::select! {
-                    biased;
-                    _ = self.shutdown.changed() => return Stop::Shutdown,
-                    cmd = self.rx.recv() => match cmd {
-                        Some(cmd) => if let Some(stop) = self.handle(cmd) {
-                        return stop;
-                    },
-                        None => return Stop::Shutdown,
-                    },
-                    _ = &mut deadline => break,
-                }
+            let timer = Some((deadline.as_mut(), Mode::Lockstep));
+            if let Err(stop) = self.serve(timer, Self::waiting_for_clients).await {
+                return stop;
             }
             for r in 0..ROBOTS {
                 if matches!(self.slots[r], Slot::Client(_)) && !self.answered[r] {
@@ -345,18 +250,9 @@ impl MatchTask {
             next += period;
             let sleep = tokio::time::sleep_until(next);
             tokio::pin!(sleep);
-            loop {
-                tokio::select! {
-                    biased;
-                    _ = self.shutdown.changed() => return Stop::Shutdown,
-                    _ = &mut sleep => break,
-                    cmd = self.rx.recv() => match cmd {
-                        Some(cmd) => if let Some(stop) = self.handle(cmd) {
-                        return stop;
-                    },
-                        None => return Stop::Shutdown,
-                    },
-                }
+            let timer = Some((sleep.as_mut(), Mode::Realtime));
+            if let Err(stop) = self.serve(timer, |_| true).await {
+                return stop;
             }
             let late = Instant::now().saturating_duration_since(next);
             self.lateness_us
@@ -425,11 +321,11 @@ impl MatchTask {
                 lateness,
             });
         }
-        let (blue, red) = self.game.score();
+        let score = self.game.goals();
         let now = self.game.tick();
         self.info.send_modify(|i| {
             i.tick = now;
-            i.score = Score { blue, red };
+            i.score = score;
         });
     }
 
@@ -474,237 +370,13 @@ impl MatchTask {
             }
         }
     }
-
-    /// Takes a connection out of the match; its robots stand from now on.
-    fn remove_conn(&mut self, conn: ConnId) -> Option<ConnEntry> {
-        let i = self.conns.iter().position(|c| c.id == conn)?;
-        let c = self.conns.swap_remove(i);
-        for p in &c.players {
-            let r = robot(c.team, *p).index();
-            self.slots[r] = Slot::Vacated;
-            self.pending[r] = None;
-        }
-        self.publish_taken();
-        Some(c)
-    }
-
-    /// Applies one command; `Some` when it ends the match.
-    fn handle(&mut self, cmd: MatchCmd) -> Option<Stop> {
-        match cmd {
-            MatchCmd::End { reply } => {
-                tracing::info!(match_id = %self.params.id, tick = self.game.tick(), "ended by an admin");
-                self.ended_by = Some(reply);
-                return Some(Stop::Ended);
-            }
-            MatchCmd::Join {
-                conn,
-                team,
-                players,
-                out,
-                kick,
-                reply,
-            } => {
-                let taken: Vec<String> = players
-                    .iter()
-                    .filter(|p| matches!(self.slots[robot(team, **p).index()], Slot::Client(_)))
-                    .map(|p| p.to_string())
-                    .collect();
-                if !taken.is_empty() {
-                    let msg = format!(
-                        "{team} player(s) {} of match {} already controlled by another connection",
-                        taken.join(", "),
-                        self.params.id
-                    );
-                    let _ = reply.send(Err(ErrorMsg::new(ErrorCode::FailedPrecondition, msg)));
-                    return None;
-                }
-                let joined = Joined {
-                    match_id: self.params.id,
-                    team,
-                    players: players.clone(),
-                    seed: self.params.seed,
-                    mode: self.params.mode,
-                    control_hz: self.game.config().control_hz,
-                    total_ticks: self.game.total_ticks(),
-                    deadline_ms: self.params.deadline.as_millis() as u64,
-                    pitch: Some(pitch(&self.game)),
-                };
-                if reply.send(Ok(joined)).is_err() {
-                    return None; // the connection went away meanwhile
-                }
-                // Joining mid-tick: the tick waits for the answers of the
-                // robots that still owe one and the connection gets the
-                // tick's observation below. A robot whose previous client
-                // already answered this tick (it left, or lost its
-                // connection, while the tick waited on others) keeps that
-                // action: sending the tick again would ask for a second
-                // answer to an answered tick, so such a connection's first
-                // observation is the next tick's (issue 15 A.5).
-                let mut owes = false;
-                for p in &players {
-                    let r = robot(team, *p).index();
-                    self.slots[r] = Slot::Client(conn);
-                    self.pending[r] = None;
-                    owes |= !self.answered[r];
-                }
-                let entry = ConnEntry {
-                    id: conn,
-                    team,
-                    players,
-                    out,
-                    kick: Some(kick),
-                };
-                tracing::info!(match_id = %self.params.id, conn, %team, players = ?entry.players, "joined");
-                let answered = self.params.mode == Mode::Lockstep && !owes;
-                if let (Some(tick), false) = (self.observed, answered) {
-                    send_observation(
-                        &self.game,
-                        &self.obs_scratch,
-                        &self.events,
-                        self.params.id,
-                        tick,
-                        &entry,
-                    );
-                }
-                self.conns.push(entry);
-                self.publish_taken();
-            }
-            MatchCmd::Leave { conn } => {
-                if let Some(c) = self.remove_conn(conn) {
-                    tracing::info!(match_id = %self.params.id, conn, team = %c.team, players = ?c.players, "left; its robots stand");
-                }
-            }
-            MatchCmd::Action {
-                conn,
-                team,
-                tick,
-                actions,
-            } => {
-                // From a connection no longer in the match: nothing to do.
-                let c = self.conns.iter().find(|c| c.id == conn)?;
-                let current = self.observed.unwrap_or(0);
-                if self.params.mode == Mode::Lockstep && tick < current {
-                    let e = ErrorMsg {
-                        code: ErrorCode::DeadlineExceeded,
-                        message: format!("tick {tick} was already played (now at tick {current}); the robot stayed"),
-                        fatal: false,
-                        in_reply_to: Some("action".into()),
-                        tick: Some(tick),
-                    };
-                    deliver(&c.out, Outgoing::Error(e));
-                    return None;
-                }
-                for (p, a) in actions.iter().enumerate() {
-                    let Some(a) = *a else { continue };
-                    let r = team.index() * PLAYERS_PER_TEAM + p;
-                    if self.slots[r] != Slot::Client(conn) {
-                        continue;
-                    }
-                    match self.params.mode {
-                        Mode::Lockstep => {
-                            self.actions[r] = a;
-                            self.answered[r] = true;
-                        }
-                        Mode::Realtime => {
-                            if self.pending[r].is_none_or(|(t, _)| t <= tick) {
-                                self.pending[r] = Some((tick, a));
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        None
-    }
-
-    fn publish_taken(&self) {
-        let mut taken = PerTeam::<[bool; PLAYERS_PER_TEAM]>::default();
-        for r in RobotId::all() {
-            taken.get_mut(r.team())[r.player()] = matches!(self.slots[r.index()], Slot::Client(_));
-        }
-        self.info.send_modify(|i| i.taken = taken);
-    }
-
-    /// The events `match_end` carries: the last tick's, unless an
-    /// observation already took them out (a match ended between ticks) or
-    /// the match failed.
-    fn unsent_events(&self, reason: EndReason) -> Vec<Event> {
-        let sent = self.observed == Some(self.game.tick());
-        if sent || reason == EndReason::Internal {
-            Vec::new()
-        } else {
-            self.events.to_vec()
-        }
-    }
-
-    fn misses_per_team(&self) -> PerTeam<[u64; PLAYERS_PER_TEAM]> {
-        let mut m = PerTeam::<[u64; PLAYERS_PER_TEAM]>::default();
-        for r in RobotId::all() {
-            m.get_mut(r.team())[r.player()] = self.misses[r.index()];
-        }
-        m
-    }
 }
 
-/// The pitch as `joined` announces it (protocol 1.2).
-fn pitch(game: &Match) -> Pitch {
-    let cfg = game.config();
-    Pitch {
-        field_length: cfg.sim.field_length,
-        field_width: cfg.sim.field_width,
-        goal_width: cfg.sim.goal_width,
-        goal_depth: cfg.sim.goal_depth,
-        goal_height: cfg.sim.goal_height,
-        ball_radius: cfg.sim.ball_radius,
-        b_d: cfg.rules.b_d,
-        b_rad: cfg.rules.b_rad,
-        frame: Frame::Team,
+/// Whether `timer` fired, polled only on its turn: before the commands
+/// (`first`) in real time, after them in lockstep.
+fn fired(timer: &mut Option<(Pin<&mut Sleep>, Mode)>, first: bool, cx: &mut Context<'_>) -> bool {
+    match timer {
+        Some((t, mode)) if (*mode == Mode::Realtime) == first => t.as_mut().poll(cx).is_ready(),
+        _ => false,
     }
-}
-
-fn robot(team: Team, p: Player) -> RobotId {
-    RobotId::new(team, p.index()).expect("Player is always < PLAYERS_PER_TEAM")
-}
-
-/// False if the connection's queue is full (it is not reading).
-fn send_observation(
-    game: &Match,
-    template: &Observation,
-    events: &Arc<Vec<Event>>,
-    match_id: MatchId,
-    tick: u64,
-    c: &ConnEntry,
-) -> bool {
-    let mut obs: [Observation; PLAYERS_PER_TEAM] = std::array::from_fn(|_| template.clone());
-    for (slot, p) in obs.iter_mut().zip(&c.players) {
-        game.observe_into(c.team, p.index(), slot);
-    }
-    let msg = Outgoing::Observation {
-        match_id,
-        tick,
-        len: c.players.len() as u8,
-        obs,
-        events: Arc::clone(events),
-    };
-    !matches!(c.out.try_send(msg), Err(mpsc::error::TrySendError::Full(_)))
-}
-
-/// Sends a message that must arrive (match end, errors) without blocking the
-/// match on a slow reader.
-fn deliver(out: &mpsc::Sender<Outgoing>, msg: Outgoing) {
-    if let Err(mpsc::error::TrySendError::Full(msg)) = out.try_send(msg) {
-        let out = out.clone();
-        tokio::spawn(async move {
-            let _ = out.send(msg).await;
-        });
-    }
-}
-
-fn percentile(v: &mut [u32], q: f64) -> Option<u32> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_unstable();
-    let i = ((v.len() - 1) as f64 * q).round() as usize;
-    Some(v[i])
 }

@@ -14,48 +14,20 @@
 //! standing pose, and whose mass and inertia are the sum of the URDF link
 //! inertias. A gait model drives it with bounded forces (see [`Sim::step`]).
 //!
-//! API CONTRACT (used by referee, server, learn; keep these signatures):
-//! ```text
-//! pub struct SimConfig { .. }            // serde Deserialize + Default (paper values), #[serde(default, deny_unknown_fields)]
-//! pub struct RobotModel { .. }           // from URDF: RobotModel::from_urdf_str / from_urdf_file / builtin() (include_str! of assets/nao.urdf)
-//! pub enum Command { Forward, TurnLeft, TurnRight, Shoot, Stay }
-//! pub struct Sim { .. }
-//! impl Sim {
-//!     pub fn new(cfg: &SimConfig, model: &RobotModel, seed: u64) -> Result<Sim, SimError>;
-//!     pub fn dt(&self) -> f32;                                  // physics step, seconds
-//!     pub fn set_command(&mut self, robot: usize, cmd: Command);// held until changed
-//!     pub fn step(&mut self);                                   // one physics step
-//!     pub fn snapshot(&self) -> &Snapshot;                      // refreshed by every step / placement
-//!     // Placements go to the nearest spot clear of every body and return it:
-//!     pub fn place_ball(&mut self, x: f32, y: f32) -> (f32, f32);  // at rest on the ground
-//!     pub fn set_ball_velocity(&mut self, vx: f32, vy: f32);
-//!     pub fn place_robot(&mut self, robot: usize, x: f32, y: f32, heading: f32) -> (f32, f32); // upright, at rest
-//!     pub fn stand_up(&mut self, robot: usize) -> (f32, f32);    // upright where it lies, same heading
-//!     pub fn place_all(&mut self, ball: (f32, f32), robots: &[(f32, f32, f32); 8])
-//!         -> ((f32, f32), [(f32, f32); 8]);                     // a kick-off: ball, then robots in order
-//!     pub fn push_robot(&mut self, robot: usize, impulse: [f32; 3]); // at torso height
-//!     pub fn state_hash(&self) -> u64;                          // raw bits of every body's pose+velocity, sim RNG state
-//!     // also: config() -> &SimConfig, seed() -> u64, steps() -> u64, counts() -> (bodies, colliders),
-//!     //       default_spot(robot) -> (x, y, heading)
-//! }
-//! pub struct Snapshot { pub step: u64, pub ball: BallState, pub robots: [RobotState; 8], pub kicks: Vec<Kick> /* this step */ }
-//! pub struct BallState { pub pos: [f32; 3], pub vel: [f32; 3] }
-//! pub struct RobotState { pub pos: [f32; 3] /* torso */, pub heading: f32, pub tilt: f32,
-//!                         pub rotation: [f32; 4] /* quaternion x, y, z, w */, pub vel: [f32; 3],
-//!                         pub fallen: bool /* balance lost, lying */, pub kicking: bool, pub last_ball_touch_step: Option<u64>,
-//!                         pub command: Command }
-//! pub struct Kick { pub robot: usize, pub speed: f32 }      // a kick that moved the ball
-//! pub struct BareWorld { .. }  // BareWorld::new(cfg, model) -> Result<_, SimError>; fn step(&mut self): the bench floor
-//!                              // (same bodies, robots walked and ball sent by setting velocities; see its docs)
-//! ```
+//! The entry points: [`Sim`] (build from a [`SimConfig`] and a
+//! [`RobotModel`], set [`Command`]s, `step`, read the [`Snapshot`], place
+//! bodies for restarts, `state_hash`), and [`BareWorld`], the same bodies
+//! without controllers, the benchmarks' floor.
 
 mod config;
+mod hash;
 mod model;
 mod place;
 mod sim;
 mod world;
 
 pub use config::SimConfig;
+pub use hash::StateHasher;
 pub use model::{
     CollisionShape, JointInfo, Primitive, RobotModel, NAO_URDF, ROOT_LINK, STANDING_POSE,
 };
@@ -64,8 +36,9 @@ pub use world::BareWorld;
 
 use serde::{Deserialize, Serialize};
 
-/// Robots on the pitch (4 a team; the referee decides which is which).
-pub const ROBOTS: usize = 8;
+/// Robots on the pitch: the wire's count, so the two cannot differ (which
+/// four are a team is the referee's business).
+pub use naosoccer_proto::ROBOTS;
 
 /// What a robot's controller does until told otherwise: the paper's five
 /// actions.

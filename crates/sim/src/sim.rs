@@ -6,8 +6,11 @@ use rand_chacha::ChaCha8Rng;
 use rapier3d::math::{Pose, Rot3, Vec3};
 use rapier3d::prelude::{ColliderHandle, PhysicsWorld, RigidBody, RigidBodyHandle};
 
+use crate::hash::StateHasher;
 use crate::place::{free_spot, Area};
-use crate::world::{build, default_robot_spot, set_sole_friction, standing_pose, ROBOT_TAG};
+use crate::world::{
+    build, default_robot_spot, set_sole_friction, standing_pose, tilt_of, ROBOT_TAG,
+};
 use crate::{
     BallState, Command, Kick, RobotModel, RobotState, SimConfig, SimError, Snapshot, ROBOTS,
 };
@@ -455,14 +458,14 @@ impl Sim {
     /// the controllers' state and the noise RNG's seed and position. Equal
     /// on the same build for the same config, seed and commands.
     pub fn state_hash(&self) -> u64 {
-        let mut h = Fnv::new();
+        let mut h = StateHasher::new();
         h.u64(self.steps);
         let mut body = |b: &RigidBody| {
             let p = b.position();
-            h.vec(p.translation);
+            h.f32s(&p.translation.to_array());
             h.f32s(&p.rotation.to_array());
-            h.vec(b.linvel());
-            h.vec(b.angvel());
+            h.f32s(&b.linvel().to_array());
+            h.f32s(&b.angvel().to_array());
         };
         body(&self.world.bodies[self.ball]);
         for &r in &self.robots {
@@ -637,40 +640,6 @@ pub(crate) fn heading_of(rot: &Rot3) -> f32 {
     let x = fwd.x - fwd.z * up.x;
     let y = fwd.y - fwd.z * up.y;
     y.atan2(x)
-}
-
-pub(crate) fn tilt_of(rot: &Rot3) -> f32 {
-    (*rot * Vec3::Z).z.clamp(-1.0, 1.0).acos()
-}
-
-struct Fnv(u64);
-
-impl Fnv {
-    fn new() -> Self {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-    fn byte(&mut self, b: u8) {
-        self.0 ^= u64::from(b);
-        self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    fn u64(&mut self, v: u64) {
-        for b in v.to_le_bytes() {
-            self.byte(b);
-        }
-    }
-    fn f32s(&mut self, v: &[f32]) {
-        for x in v {
-            for b in x.to_bits().to_le_bytes() {
-                self.byte(b);
-            }
-        }
-    }
-    fn vec(&mut self, v: Vec3) {
-        self.f32s(&v.to_array());
-    }
-    fn finish(&self) -> u64 {
-        self.0
-    }
 }
 
 /// Issue 12's regressions that need to set a body's state directly (a ball

@@ -416,10 +416,7 @@ impl BareWorld {
     pub fn robot_poses(&self) -> [([f32; 3], f32); ROBOTS] {
         self.robots.map(|h| {
             let body = &self.world.bodies[h];
-            (
-                body.translation().to_array(),
-                crate::sim::tilt_of(body.rotation()),
-            )
+            (body.translation().to_array(), tilt_of(body.rotation()))
         })
     }
 
@@ -441,4 +438,9 @@ impl BareWorld {
             })
             .count()
     }
+}
+
+/// Angle between a body's up axis and the vertical, radians.
+pub(crate) fn tilt_of(rot: &Rot3) -> f32 {
+    (*rot * Vec3::Z).z.clamp(-1.0, 1.0).acos()
 }

@@ -81,8 +81,15 @@ pub struct Field {
 }
 
 impl Field {
+    /// The pitch as the sim builds it.
     pub fn from_sim(cfg: &SimConfig) -> Field {
-        crate::sim_glue::field(cfg)
+        Field {
+            half_length: cfg.field_length / 2.0,
+            half_width: cfg.field_width / 2.0,
+            goal_half_width: cfg.goal_width / 2.0,
+            crossbar: cfg.goal_height,
+            ball_radius: cfg.ball_radius,
+        }
     }
 
     /// Whether a point is on the pitch (lines included).
@@ -121,7 +128,7 @@ pub fn last_touch(snap: &Snapshot) -> Option<RobotId> {
 pub(crate) mod testing {
     //! Synthetic snapshots for the rules' unit tests: no physics involved.
     use super::Field;
-    use naosoccer_sim::Snapshot;
+    use naosoccer_sim::{BallState, RobotState, Snapshot};
 
     pub fn field() -> Field {
         Field {
@@ -135,7 +142,24 @@ pub(crate) mod testing {
 
     /// Ball at rest at the centre, robots upright in two rows far from it.
     pub fn snapshot() -> Snapshot {
-        crate::sim_glue::synthetic_snapshot()
+        let robot = |i: usize| {
+            let blue = i < 4;
+            let x = if blue { -1.5 } else { 1.5 };
+            RobotState {
+                pos: [x, (i % 4) as f32 - 1.5, 0.3],
+                heading: if blue { 0.0 } else { std::f32::consts::PI },
+                ..RobotState::default()
+            }
+        };
+        Snapshot {
+            step: 0,
+            ball: BallState {
+                pos: [0.0, 0.0, 0.05],
+                vel: [0.0; 3],
+            },
+            robots: std::array::from_fn(robot),
+            kicks: Vec::new(),
+        }
     }
 }
 

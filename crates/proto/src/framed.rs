@@ -1,8 +1,9 @@
-//! Frames over tokio byte streams, shared by the client library and the
-//! server (which depends on this crate for it): [`FrameReader`] yields whole
-//! frame payloads, [`FrameWriter`] encodes messages into a reused buffer.
+//! Frames over tokio byte streams (feature `tokio`), shared by the server
+//! and the client library: [`FrameReader`] yields whole frame payloads,
+//! [`FrameWriter`] encodes messages into a reused buffer. The size checks
+//! are [`crate::frame`]'s; this adds only the reads and writes.
 
-use naosoccer_proto::frame::{self, FrameDecoder, FrameError, HEADER_LEN};
+use crate::frame::{self, FrameDecoder, FrameError, HEADER_LEN};
 use serde::Serialize;
 use std::io;
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};

@@ -1,0 +1,35 @@
+//! What the registry sees of a match (`list_matches`, `join` without a
+//! match id): its `MatchInfo`, first and as joins and leaves change it.
+
+use super::{MatchParams, MatchTask, Slot};
+use naosoccer_proto::msg::{MatchInfo, MatchState, PerTeam, Score};
+use naosoccer_proto::{RobotId, PLAYERS_PER_TEAM};
+use naosoccer_referee::Match;
+
+impl MatchTask {
+    /// The first `MatchInfo` of a match (before its task runs).
+    pub(crate) fn initial_info(params: &MatchParams, game: &Match) -> MatchInfo {
+        MatchInfo {
+            match_id: params.id,
+            state: MatchState::Waiting,
+            mode: params.mode,
+            fill: params.fill,
+            seed: params.seed,
+            control_hz: game.config().control_hz,
+            tick: game.tick(),
+            total_ticks: game.total_ticks(),
+            deadline_ms: params.deadline.as_millis() as u64,
+            start_players: params.start_players,
+            score: Score::default(),
+            taken: PerTeam::default(),
+        }
+    }
+
+    pub(super) fn publish_taken(&self) {
+        let mut taken = PerTeam::<[bool; PLAYERS_PER_TEAM]>::default();
+        for r in RobotId::all() {
+            taken.get_mut(r.team())[r.player()] = matches!(self.slots[r.index()], Slot::Client(_));
+        }
+        self.info.send_modify(|i| i.taken = taken);
+    }
+}

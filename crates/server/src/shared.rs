@@ -1,0 +1,289 @@
+//! What every connection shares: the configuration, the tokens and the
+//! match registry. Match state is not here: each match task owns its own;
+//! this holds only the handles to reach them.
+
+use crate::config::{ServerConfig, Tokens};
+use crate::match_msg::MatchCmd;
+use crate::match_task::{MatchParams, MatchTask};
+use crate::observer::Hooks;
+use naosoccer_proto::msg::{
+    CreateMatch, ErrorCode, ErrorMsg, MatchId, MatchInfo, MatchState, Player,
+};
+use naosoccer_proto::Team;
+use naosoccer_referee::{Match, MatchError};
+use std::collections::{BTreeMap, HashMap};
+use std::net::IpAddr;
+use std::sync::atomic::AtomicU64;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::{mpsc, watch};
+
+/// Finished matches kept for `list_matches`; older ones are forgotten.
+const KEEP_FINISHED: usize = 64;
+/// Commands queued to one match task.
+const MATCH_QUEUE: usize = 256;
+
+struct MatchEntry {
+    tx: mpsc::Sender<MatchCmd>,
+    info: watch::Receiver<MatchInfo>,
+}
+
+/// What every connection shares.
+pub(crate) struct Shared {
+    pub(crate) config: ServerConfig,
+    pub(crate) tokens: Tokens,
+    hooks: Hooks,
+    matches: Mutex<Registry>,
+    shutdown: watch::Receiver<bool>,
+    /// Each task holds a clone; `run` waits for all of them to drop.
+    done: mpsc::Sender<()>,
+    pub(crate) next_conn: AtomicU64,
+    epoch: tokio::time::Instant,
+    /// Open connections per peer IP (`limits.max_connections_per_addr`).
+    per_addr: Mutex<HashMap<IpAddr, usize>>,
+}
+
+/// One connection's count in `Shared::per_addr`, released on drop.
+pub(crate) struct AddrSlot {
+    shared: Arc<Shared>,
+    ip: IpAddr,
+}
+
+impl Drop for AddrSlot {
+    fn drop(&mut self) {
+        let mut map = self.shared.per_addr.lock().expect("per_addr lock poisoned");
+        if let Some(n) = map.get_mut(&self.ip) {
+            *n -= 1;
+            if *n == 0 {
+                map.remove(&self.ip);
+            }
+        }
+    }
+}
+
+impl Shared {
+    pub(crate) fn new(
+        config: ServerConfig,
+        tokens: Tokens,
+        hooks: Hooks,
+        shutdown: watch::Receiver<bool>,
+        done: mpsc::Sender<()>,
+    ) -> Shared {
+        Shared {
+            config,
+            tokens,
+            hooks,
+            matches: Mutex::new(Registry::default()),
+            shutdown,
+            done,
+            next_conn: AtomicU64::new(1),
+            epoch: tokio::time::Instant::now(),
+            per_addr: Mutex::new(HashMap::new()),
+        }
+    }
+
+    pub(crate) fn claim_addr(self: &Arc<Self>, ip: IpAddr) -> Option<AddrSlot> {
+        let mut map = self.per_addr.lock().expect("per_addr lock poisoned");
+        let n = map.entry(ip).or_insert(0);
+        if *n >= self.config.limits.max_connections_per_addr {
+            return None;
+        }
+        *n += 1;
+        Some(AddrSlot {
+            shared: self.clone(),
+            ip,
+        })
+    }
+}
+
+#[derive(Default)]
+struct Registry {
+    next_id: u64,
+    matches: BTreeMap<MatchId, MatchEntry>,
+    /// Matches whose id is taken but whose world is still being built
+    /// (outside the lock); they count towards `max_matches`.
+    starting: usize,
+}
+
+/// Why `create_match` made no match.
+#[derive(Debug)]
+pub(crate) enum CreateError {
+    /// The request, or the server's state, does not allow it.
+    Refused(ErrorMsg),
+    /// The match configuration did not build (URDF, world).
+    Build(MatchError),
+}
+
+impl From<ErrorMsg> for CreateError {
+    fn from(e: ErrorMsg) -> CreateError {
+        CreateError::Refused(e)
+    }
+}
+
+impl Shared {
+    pub(crate) fn shutdown_signal(&self) -> watch::Receiver<bool> {
+        self.shutdown.clone()
+    }
+
+    /// Creates a match and spawns its task. The world is built with the
+    /// registry unlocked (parsing the URDF and building a world takes
+    /// milliseconds that every other connection's join or list would wait
+    /// for): an id and a place under `max_matches` are reserved first.
+    pub(crate) fn create_match(&self, req: &CreateMatch) -> Result<MatchInfo, CreateError> {
+        let cfg = &self.config;
+        let mut match_cfg = cfg.match_cfg.clone();
+        if let Some(min) = req.minutes {
+            if !(min.is_finite() && min > 0.0 && min <= 24.0 * 60.0) {
+                return Err(invalid(format!("minutes {min} not in (0, 1440]")));
+            }
+            match_cfg.minutes = min;
+        }
+        let start_players = req.start_players.unwrap_or(cfg.start_players);
+        if start_players as usize > naosoccer_proto::ROBOTS {
+            return Err(invalid(format!("start_players {start_players} exceeds 8")));
+        }
+        let deadline_ms = req.deadline_ms.unwrap_or(cfg.deadline_ms);
+        if deadline_ms == 0 || deadline_ms > 600_000 {
+            return Err(invalid(format!(
+                "deadline_ms {deadline_ms} not in 1..=600000"
+            )));
+        }
+        let id = {
+            let mut reg = self.registry();
+            let unfinished = reg.starting
+                + reg
+                    .matches
+                    .values()
+                    .filter(|e| e.info.borrow().state != MatchState::Finished)
+                    .count();
+            if unfinished >= cfg.max_matches {
+                return Err(CreateError::Refused(ErrorMsg::new(
+                    ErrorCode::ResourceExhausted,
+                    format!("the server already runs {unfinished} matches (max_matches)"),
+                )));
+            }
+            reg.next_id += 1;
+            reg.starting += 1;
+            MatchId(reg.next_id)
+        };
+        let params = MatchParams {
+            id,
+            seed: req.seed.unwrap_or(cfg.seed.wrapping_add(id.0 - 1)),
+            mode: req.mode.unwrap_or(cfg.mode),
+            fill: req.fill.unwrap_or(cfg.fill),
+            start_players,
+            deadline: Duration::from_millis(deadline_ms),
+            epoch: self.epoch,
+            panic_at_tick: cfg.panic_at.get(&id).copied(),
+        };
+        let game = match Match::new(&match_cfg, params.seed) {
+            Ok(game) => game,
+            Err(e) => {
+                self.registry().starting -= 1;
+                return Err(CreateError::Build(e));
+            }
+        };
+        let info = MatchTask::initial_info(&params, &game);
+        let (info_tx, info_rx) = watch::channel(info.clone());
+        let (tx, rx) = mpsc::channel(MATCH_QUEUE);
+        let hook = self.hooks.observer.as_ref().and_then(|f| f(&info));
+        let observer = crate::recording::observer_for(&self.config, hook, &info);
+        let task = MatchTask::new(params, game, rx, info_tx, self.shutdown.clone(), observer);
+        let done = self.done.clone();
+        tokio::spawn(async move {
+            task.run().await;
+            drop(done);
+        });
+        let mut reg = self.registry();
+        reg.starting -= 1;
+        reg.matches.insert(id, MatchEntry { tx, info: info_rx });
+        prune_finished(&mut reg);
+        Ok(info)
+    }
+
+    /// The registry, for moments: nothing slow runs while it is locked.
+    fn registry(&self) -> std::sync::MutexGuard<'_, Registry> {
+        self.matches.lock().expect("registry lock poisoned")
+    }
+
+    pub(crate) fn list_matches(&self) -> Vec<MatchInfo> {
+        let reg = self.registry();
+        reg.matches
+            .values()
+            .map(|e| e.info.borrow().clone())
+            .collect()
+    }
+
+    /// The match to join: the named one, or the oldest unfinished one whose
+    /// requested slots are free.
+    pub(crate) fn find_match(
+        &self,
+        id: Option<MatchId>,
+        team: Team,
+        players: &[Player],
+    ) -> Result<(MatchId, mpsc::Sender<MatchCmd>), ErrorMsg> {
+        let reg = self.registry();
+        match id {
+            Some(id) => {
+                let e = reg
+                    .matches
+                    .get(&id)
+                    .ok_or_else(|| ErrorMsg::new(ErrorCode::NotFound, format!("no match {id} on this server")))?;
+                if e.info.borrow().state == MatchState::Finished {
+                    return Err(ErrorMsg::new(ErrorCode::FailedPrecondition, format!("match {id} has finished")));
+                }
+                Ok((id, e.tx.clone()))
+            }
+            None => reg
+                .matches
+                .iter()
+                .find(|(_, e)| {
+                    let i = e.info.borrow();
+                    i.state != MatchState::Finished && players.iter().all(|p| !i.taken.get(team)[p.index()])
+                })
+                .map(|(id, e)| (*id, e.tx.clone()))
+                .ok_or_else(|| {
+                    ErrorMsg::new(
+                        ErrorCode::NotFound,
+                        format!("no unfinished match has {team} player(s) {players:?} free; create one or name a match"),
+                    )
+                }),
+        }
+    }
+
+    /// The channel of an unfinished match, for `end_match`.
+    pub(crate) fn running_match(&self, id: MatchId) -> Result<mpsc::Sender<MatchCmd>, ErrorMsg> {
+        let reg = self.registry();
+        let e = reg.matches.get(&id).ok_or_else(|| {
+            ErrorMsg::new(ErrorCode::NotFound, format!("no match {id} on this server"))
+        })?;
+        if e.info.borrow().state == MatchState::Finished {
+            let m = format!("match {id} has finished");
+            return Err(ErrorMsg::new(ErrorCode::FailedPrecondition, m));
+        }
+        Ok(e.tx.clone())
+    }
+
+    pub(crate) fn task_guard(&self) -> mpsc::Sender<()> {
+        self.done.clone()
+    }
+}
+
+fn invalid(message: String) -> CreateError {
+    CreateError::Refused(ErrorMsg::new(ErrorCode::InvalidArgument, message))
+}
+
+fn prune_finished(reg: &mut Registry) {
+    let finished: Vec<MatchId> = reg
+        .matches
+        .iter()
+        .filter(|(_, e)| e.info.borrow().state == MatchState::Finished)
+        .map(|(id, _)| *id)
+        .collect();
+    for id in finished
+        .iter()
+        .take(finished.len().saturating_sub(KEEP_FINISHED))
+    {
+        reg.matches.remove(id);
+    }
+}
