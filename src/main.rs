@@ -27,7 +27,7 @@ enum Command {
     Client(cmd::client::ClientArgs),
     /// Re-simulate a recording and check every tick against it.
     Replay(cmd::record::ReplayArgs),
-    /// Draw a recording as a top view of the pitch (PNG).
+    /// Draw a recording as a top view of the pitch (PNG, or an animated GIF).
     Render(cmd::record::RenderArgs),
     /// Train a DQN or PPO team in process (checkpoints, metrics CSV).
     #[cfg(feature = "learn")]

@@ -1,4 +1,5 @@
 //! One module per subcommand (or family of subcommands).
+pub mod animate;
 pub mod bench;
 pub mod client;
 #[cfg(feature = "learn")]

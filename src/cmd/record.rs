@@ -1,12 +1,14 @@
 //! `naosoccer replay` and `naosoccer render`: recordings after the fact.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context;
 use clap::Args;
 use naosoccer_proto::{Event, Team, ROBOTS};
 use naosoccer_record::{replay, Recording, ReplayOutcome};
+
+use super::animate::{write_gif, GifOptions};
 
 #[derive(Args, Debug)]
 #[command(
@@ -24,15 +26,43 @@ pub struct ReplayArgs {
 }
 
 #[derive(Args, Debug)]
+#[command(
+    group = clap::ArgGroup::new("output").required(true).multiple(true).args(["out", "gif"]),
+    after_help = "--out draws the whole match in one PNG: the paths of the ball and \
+the robots, goals ringed. --gif draws it as an animated top view: the pitch, \
+robots (team colours, one shade per player, a black heading line, a grey centre \
+when fallen, a yellow ring on the robot in possession) and the ball, under a \
+banner with the score (blue - red) and the game clock. Every frame shows one \
+tick; --speed game seconds pass per second of GIF at --fps frames per second, \
+so frames are --speed x control rate / --fps ticks apart (at 10 Hz, the \
+defaults --speed 10 --fps 10 draw every 10th tick: a 10-minute match in 60 s, \
+601 frames). --from/--to cut a part of the match."
+)]
 pub struct RenderArgs {
     /// The recording (.mcap) to draw.
     pub file: PathBuf,
-    /// Where to write the PNG.
-    #[arg(long, short)]
-    pub out: PathBuf,
-    /// Image width in pixels (the height follows the pitch's proportions).
-    #[arg(long, default_value_t = 1400)]
-    pub width: u32,
+    /// Where to write the PNG (a still: the whole match's paths).
+    #[arg(long, short, value_name = "OUT.png")]
+    pub out: Option<PathBuf>,
+    /// Where to write an animated GIF of the match (top view, score, clock).
+    #[arg(long, value_name = "OUT.gif")]
+    pub gif: Option<PathBuf>,
+    /// Image width in pixels (the height follows the pitch's proportions);
+    /// default 1400 for the PNG, 480 for the GIF.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// GIF: game seconds per second of animation.
+    #[arg(long, default_value_t = 10.0, value_name = "S")]
+    pub speed: f64,
+    /// GIF: frames per second of animation (1 to 50).
+    #[arg(long, default_value_t = 10, value_name = "N")]
+    pub fps: u32,
+    /// GIF: start at this game time (seconds).
+    #[arg(long, default_value_t = 0.0, value_name = "SECONDS")]
+    pub from: f64,
+    /// GIF: stop at this game time (seconds; default: the end).
+    #[arg(long, value_name = "SECONDS")]
+    pub to: Option<f64>,
 }
 
 pub fn replay_cmd(args: ReplayArgs) -> ExitCode {
@@ -150,22 +180,51 @@ fn print_summary(rec: &Recording) {
 }
 
 pub fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
-    use plotters::prelude::*;
-
     let rec = Recording::read_file(&args.file)
         .with_context(|| format!("reading {}", args.file.display()))?;
     if let Some(why) = &rec.truncated {
         eprintln!("warning: the recording was cut short ({why}); drawing what it holds");
     }
+    if let Some(out) = &args.out {
+        render_png(&rec, out, args.width.unwrap_or(1400))?;
+    }
+    if let Some(out) = &args.gif {
+        let opts = GifOptions {
+            width: args.width.unwrap_or(480),
+            speed: args.speed,
+            fps: args.fps,
+            from: args.from,
+            to: args.to,
+        };
+        let s = write_gif(&rec, out, opts)?;
+        let hz = rec.meta.control_hz as f64;
+        println!(
+            "wrote {} ({} frames of {}x{}, every {} ticks, game time {:.1}-{:.1} s, {} fps)",
+            out.display(),
+            s.frames,
+            s.width,
+            s.height,
+            s.step,
+            s.first_tick as f64 / hz,
+            s.last_tick as f64 / hz,
+            args.fps
+        );
+    }
+    Ok(())
+}
+
+fn render_png(rec: &Recording, out: &Path, width: u32) -> anyhow::Result<()> {
+    use plotters::prelude::*;
+
     let sim = &rec.meta.config.sim;
     let (hl, hw) = (sim.field_length / 2.0, sim.field_width / 2.0);
     let margin = sim.ground_margin.max(sim.goal_depth) as f64;
     let (x0, x1) = (-(hl as f64) - margin, hl as f64 + margin);
     let (y0, y1) = (-(hw as f64) - margin, hw as f64 + margin);
-    let width = args.width.max(200);
+    let width = width.max(200);
     let height = ((width as f64) * (y1 - y0) / (x1 - x0)).round() as u32;
 
-    let root = BitMapBackend::new(&args.out, (width, height)).into_drawing_area();
+    let root = BitMapBackend::new(out, (width, height)).into_drawing_area();
     root.fill(&RGBColor(28, 110, 40))?;
     let mut chart = ChartBuilder::on(&root).build_cartesian_2d(x0..x1, y0..y1)?;
     let white = ShapeStyle::from(&WHITE).stroke_width(3);
@@ -261,10 +320,10 @@ pub fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     root.present()
-        .with_context(|| format!("writing {}", args.out.display()))?;
+        .with_context(|| format!("writing {}", out.display()))?;
     println!(
         "wrote {} ({} ticks, {} goals)",
-        args.out.display(),
+        out.display(),
         rec.states.len().saturating_sub(1),
         rec.events
             .iter()
