@@ -3,5 +3,7 @@
 //!
 //! - [`runner`]: plays a whole match in process (one `Match`, one built-in
 //!   policy instance per robot) and reports the outcome.
+//! - [`live`]: matches streamed to Foxglove over WebSocket (`--live`).
 
+pub mod live;
 pub mod runner;

@@ -321,7 +321,7 @@ pub fn write_gif(rec: &Recording, out: &Path, opts: GifOptions) -> anyhow::Resul
     for s in states
         .iter()
         .filter(|s| s.tick >= first_tick && s.tick <= last_tick)
-        .filter(|s| (s.tick - first_tick) % step == 0)
+        .filter(|s| (s.tick - first_tick).is_multiple_of(step))
     {
         let mut c = bg.clone();
         draw_state(&mut c, &view, s);

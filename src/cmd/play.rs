@@ -2,16 +2,17 @@
 //! one against the bare physics floor.
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use clap::Args;
+use naosoccer::live::{LiveServer, MatchStream, Pace};
 use naosoccer::runner::{self, MatchOutcome};
 use naosoccer_client::PolicyKind;
 use naosoccer_proto::{Action, Event, RobotId, Team, TeamStats, ROBOTS};
 
 use super::team::TeamSpec;
-use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RecordingSummary};
+use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RecordingSummary, StateRecord};
 use naosoccer_referee::{Match, MatchConfig};
 use naosoccer_sim::{BareWorld, RobotModel};
 
@@ -59,6 +60,21 @@ pub struct MatchArgs {
     /// replay FILE` re-simulates it.
     #[arg(long, value_name = "FILE.mcap")]
     record: Option<PathBuf>,
+    /// Stream the match live to Foxglove or Lichtblick (Foxglove WebSocket,
+    /// topics /match/1/...; docs/RECORDINGS.md) on ADDR, default
+    /// 127.0.0.1:8765 (port 0: any free port, printed on stderr), and play it
+    /// at real-time pace (see --speed).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1,
+          default_missing_value = naosoccer::live::DEFAULT_ADDR)]
+    live: Option<String>,
+    /// With --live: game seconds per second of wall-clock time (1 = real
+    /// time, 4 = four times as fast).
+    #[arg(long, value_name = "X", default_value_t = 1.0, requires = "live")]
+    speed: f64,
+    /// With --live: wait for a viewer to subscribe to the scene before
+    /// kick-off (at most 10 minutes).
+    #[arg(long, requires = "live")]
+    wait_viewer: bool,
 }
 
 fn load_config(path: Option<&PathBuf>, minutes: Option<f32>) -> anyhow::Result<MatchConfig> {
@@ -89,12 +105,19 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
         Some(path) => Some(MatchRecording::start(path, &cfg, &args)?),
         None => None,
     };
+    let mut live = match &args.live {
+        Some(addr) => Some(LiveMatch::start(addr, &cfg, &args)?),
+        None => None,
+    };
     let outcome = runner::run_to_end_with(
         Match::new(&cfg, args.seed)?,
         policies,
         |m, actions, events| {
             if let Some(r) = &mut recording {
                 r.tick(m, actions, events);
+            }
+            if let Some(l) = &mut live {
+                l.tick(m, events);
             }
             // About once a game minute; enough to see it move, cheap to print.
             if show_progress && (m.tick() - last_shown >= 600 || m.is_finished()) {
@@ -113,6 +136,9 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
             }
         },
     );
+    if let Some(l) = live {
+        l.server.finish(naosoccer::live::LINGER);
+    }
     let recorded = match recording {
         Some(r) => Some(r.report()?),
         None => None,
@@ -130,6 +156,45 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// `--live`: the match streamed at real-time pace.
+struct LiveMatch {
+    server: LiveServer,
+    stream: MatchStream,
+    pace: Pace,
+}
+
+impl LiveMatch {
+    fn start(addr: &str, cfg: &MatchConfig, args: &MatchArgs) -> anyhow::Result<Self> {
+        anyhow::ensure!(
+            args.speed > 0.0 && args.speed.is_finite(),
+            "--speed must be a positive number"
+        );
+        let server = LiveServer::start(addr)?;
+        let mut stream = server.stream(1)?;
+        // The same seed and config give the same kick-off as the runner's.
+        let m = Match::new(cfg, args.seed)?;
+        stream.begin(&m);
+        if args.wait_viewer && !server.wait_for_viewer(Duration::from_secs(600)) {
+            anyhow::bail!("no viewer subscribed within 10 minutes");
+        }
+        stream.tick(&StateRecord::of(&m), &[], Some(&m.stats()));
+        Ok(LiveMatch {
+            server,
+            stream,
+            pace: Pace::new(cfg.control_hz, args.speed),
+        })
+    }
+
+    fn tick(&mut self, m: &Match, events: &[Event]) {
+        if self.stream.watched() {
+            let stats = (m.tick().is_multiple_of(10) || m.is_finished()).then(|| m.stats());
+            self.stream
+                .tick(&StateRecord::of(m), events, stats.as_ref());
+        }
+        self.pace.wait(m.tick());
+    }
 }
 
 /// `--record`: the recorder of an in-process match. The runner owns the

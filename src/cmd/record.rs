@@ -23,6 +23,20 @@ pub struct ReplayArgs {
     /// Print the match statistics stored in the file instead of re-simulating.
     #[arg(long)]
     pub summary: bool,
+    /// First stream the recording live to Foxglove or Lichtblick (Foxglove
+    /// WebSocket on ADDR, default 127.0.0.1:8765; topics /match/ID/..., ID
+    /// the recorded server match id or 1), every recorded tick in order at
+    /// real-time pace (see --speed); then re-simulate and check as usual.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1,
+          default_missing_value = naosoccer::live::DEFAULT_ADDR)]
+    pub live: Option<String>,
+    /// With --live: game seconds per second of wall-clock time.
+    #[arg(long, value_name = "X", default_value_t = 1.0, requires = "live")]
+    pub speed: f64,
+    /// With --live: wait for a viewer to subscribe to the scene first (at
+    /// most 10 minutes).
+    #[arg(long, requires = "live")]
+    pub wait_viewer: bool,
 }
 
 #[derive(Args, Debug)]
@@ -73,6 +87,12 @@ pub fn replay_cmd(args: ReplayArgs) -> ExitCode {
             return ExitCode::from(3);
         }
     };
+    if let Some(addr) = &args.live {
+        if let Err(e) = stream_recording(&rec, addr, &args) {
+            eprintln!("error: {e:#}");
+            return ExitCode::from(3);
+        }
+    }
     if args.summary {
         print_summary(&rec);
         return if rec.is_complete() {
@@ -118,6 +138,45 @@ pub fn replay_cmd(args: ReplayArgs) -> ExitCode {
             ExitCode::from(3)
         }
     }
+}
+
+/// `replay --live`: every recorded state in order, with the events up to
+/// it, at the chosen pace; the final statistics at the end.
+fn stream_recording(rec: &Recording, addr: &str, args: &ReplayArgs) -> anyhow::Result<()> {
+    use naosoccer::live::{LiveServer, Pace, LINGER};
+    anyhow::ensure!(
+        args.speed > 0.0 && args.speed.is_finite(),
+        "--speed must be a positive number"
+    );
+    let server = LiveServer::start(addr)?;
+    let mut stream = server.stream(rec.meta.match_id.unwrap_or(1))?;
+    // The scene's geometry comes from the recorded configuration.
+    let m = naosoccer_referee::Match::new(&rec.meta.config, rec.meta.seed)
+        .context("re-creating the recorded match")?;
+    stream.begin(&m);
+    if args.wait_viewer && !server.wait_for_viewer(std::time::Duration::from_secs(600)) {
+        anyhow::bail!("no viewer subscribed within 10 minutes");
+    }
+    let pace = Pace::new(rec.meta.control_hz, args.speed);
+    let mut events = rec.events.iter().peekable();
+    let mut due = Vec::new();
+    let first = rec.states.first().map_or(0, |s| s.tick);
+    for (i, state) in rec.states.iter().enumerate() {
+        due.clear();
+        while let Some(e) = events.next_if(|e| e.tick() <= state.tick) {
+            due.push(e.clone());
+        }
+        let last = i + 1 == rec.states.len();
+        let stats = if last {
+            rec.stats.as_ref().map(|f| f.stats)
+        } else {
+            None
+        };
+        pace.wait(state.tick - first);
+        stream.tick(state, &due, stats.as_ref());
+    }
+    server.finish(LINGER);
+    Ok(())
 }
 
 fn print_summary(rec: &Recording) {

@@ -15,7 +15,8 @@
 //! rate), and compression runs on the writer's thread, so the same match
 //! gives the same bytes.
 
-mod foxglove;
+/// The Foxglove scene: also what `--live` streams.
+pub mod foxglove;
 mod messages;
 mod reader;
 mod replay;

@@ -1,0 +1,329 @@
+//! Live viewing: matches streamed to Foxglove or Lichtblick over the Foxglove
+//! SDK's WebSocket server (docs/RECORDINGS.md, "Watching live").
+//!
+//! Each match gets its own topics, `/match/{id}/...`: the recording's 3D
+//! scene (`foxglove.SceneUpdate`, JSON, built by `naosoccer_record`'s scene
+//! code) with a scoreboard text above the pitch, the robots' and ball's
+//! transforms (`foxglove.FrameTransforms`), the state, the score and clock,
+//! the referee events and the statistics.
+//!
+//! Watching changes nothing: a stream only reads the match after a tick, on
+//! the match's own thread, and hands the bytes to the SDK, whose per-viewer
+//! queue is bounded ([`BACKLOG`] messages, the oldest dropped when a viewer
+//! does not keep up); nothing waits for a viewer. With no viewer subscribed
+//! the messages are not even built.
+
+use std::net::SocketAddr;
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use anyhow::Context as _;
+use foxglove::websocket::{ChannelView, Client, ServerListener};
+use foxglove::{Context, PartialMetadata, RawChannel, Schema, WebSocketServerHandle};
+use naosoccer_proto::{Event, MatchStats};
+use naosoccer_record::foxglove as scene;
+use naosoccer_record::StateRecord;
+use naosoccer_referee::Match;
+use serde_json::{json, Value};
+
+/// Where `--live` listens when no address is given.
+pub const DEFAULT_ADDR: &str = "127.0.0.1:8765";
+
+/// Messages queued per viewer before the oldest are dropped.
+pub const BACKLOG: usize = 256;
+
+/// The pitch is re-sent in the scene once every this many ticks (1 s at
+/// 10 Hz), so a viewer that connects mid-match sees it; the robots, the
+/// ball and the scoreboard go out every tick.
+const PITCH_EVERY: u64 = 10;
+
+/// Counts subscriptions, so a runner can wait for its first viewer.
+#[derive(Default)]
+struct Viewers {
+    subscribed: Mutex<u64>,
+    changed: Condvar,
+}
+
+impl ServerListener for Viewers {
+    fn on_subscribe(&self, _client: Client, channel: ChannelView) {
+        if channel.topic().ends_with("/scene") {
+            *self.subscribed.lock().unwrap() += 1;
+            self.changed.notify_all();
+        }
+    }
+}
+
+/// The WebSocket server and its channels' context.
+pub struct LiveServer {
+    ctx: Arc<Context>,
+    handle: Option<WebSocketServerHandle>,
+    viewers: Arc<Viewers>,
+    addr: SocketAddr,
+}
+
+impl LiveServer {
+    /// Starts the server on `addr` (`HOST:PORT`; port 0 picks a free one)
+    /// and prints `live: ws://HOST:PORT` on stderr.
+    pub fn start(addr: &str) -> anyhow::Result<LiveServer> {
+        let sock: SocketAddr = addr
+            .parse()
+            .with_context(|| format!("--live {addr}: expected HOST:PORT, e.g. {DEFAULT_ADDR}"))?;
+        let ctx = Context::new();
+        let viewers = Arc::new(Viewers::default());
+        let handle = ctx
+            .websocket_server()
+            .name(format!("naosoccer {}", env!("CARGO_PKG_VERSION")))
+            .bind(sock.ip().to_string(), sock.port())
+            .message_backlog_size(BACKLOG)
+            .listener(viewers.clone())
+            .start_blocking()
+            .with_context(|| format!("starting the live server on {addr}"))?;
+        let addr = SocketAddr::new(sock.ip(), handle.port());
+        eprintln!("live: ws://{addr} (open it in Foxglove or Lichtblick: Open connection, Foxglove WebSocket)");
+        Ok(LiveServer {
+            ctx,
+            handle: Some(handle),
+            viewers,
+            addr,
+        })
+    }
+
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// Blocks until a viewer has subscribed to a scene channel (or `timeout`
+    /// passed); true if one did.
+    pub fn wait_for_viewer(&self, timeout: Duration) -> bool {
+        let guard = self.viewers.subscribed.lock().unwrap();
+        let (guard, _) = self
+            .viewers
+            .changed
+            .wait_timeout_while(guard, timeout, |n| *n == 0)
+            .unwrap();
+        *guard > 0
+    }
+
+    /// The channels of match `id`.
+    pub fn stream(&self, id: u64) -> anyhow::Result<MatchStream> {
+        MatchStream::new(&self.ctx, id)
+    }
+}
+
+impl LiveServer {
+    /// After the last tick: waits while viewers are still connected (at most
+    /// `linger`), so that they receive what is queued for them, then stops.
+    pub fn finish(mut self, linger: Duration) {
+        let end = Instant::now() + linger;
+        if let Some(h) = &self.handle {
+            while h.client_count() > 0 && Instant::now() < end {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
+        if let Some(h) = self.handle.take() {
+            drop(h.stop());
+        }
+    }
+}
+
+/// How long `--live` keeps serving connected viewers after the match ends.
+pub const LINGER: Duration = Duration::from_secs(5);
+
+impl Drop for LiveServer {
+    fn drop(&mut self) {
+        if let Some(h) = self.handle.take() {
+            // Shut down in the background: the caller is done with it.
+            drop(h.stop());
+        }
+    }
+}
+
+fn wall_ns() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_nanos() as u64)
+        .unwrap_or(0)
+}
+
+/// One match's channels.
+pub struct MatchStream {
+    id: u64,
+    scene: Arc<RawChannel>,
+    tf: Arc<RawChannel>,
+    state: Arc<RawChannel>,
+    score: Arc<RawChannel>,
+    events: Arc<RawChannel>,
+    stats: Arc<RawChannel>,
+    /// The recording's scene entities: the pitch first, then robots and ball.
+    pitch: Option<Value>,
+    bodies: Vec<Value>,
+    /// Where the scoreboard floats: above the far touch line.
+    board_y: f32,
+    buf: Vec<u8>,
+}
+
+fn channel(
+    ctx: &Arc<Context>,
+    topic: String,
+    schema: &str,
+    data: Vec<u8>,
+) -> anyhow::Result<Arc<RawChannel>> {
+    ctx.channel_builder(topic.clone())
+        .message_encoding("json")
+        .schema(Schema::new(schema, "jsonschema", data))
+        .build_raw()
+        .with_context(|| format!("creating the live channel {topic}"))
+}
+
+const OBJECT: &[u8] = b"{\"type\":\"object\"}";
+
+impl MatchStream {
+    fn new(ctx: &Arc<Context>, id: u64) -> anyhow::Result<MatchStream> {
+        let t = |name: &str| format!("/match/{id}/{name}");
+        Ok(MatchStream {
+            id,
+            scene: channel(
+                ctx,
+                t("scene"),
+                scene::SCENE_SCHEMA_NAME,
+                scene::scene_schema(),
+            )?,
+            tf: channel(ctx, t("tf"), scene::TF_SCHEMA_NAME, scene::tf_schema())?,
+            state: channel(ctx, t("state"), "naosoccer.State", OBJECT.to_vec())?,
+            score: channel(ctx, t("score"), "naosoccer.Score", OBJECT.to_vec())?,
+            events: channel(ctx, t("events"), "naosoccer.Event", OBJECT.to_vec())?,
+            stats: channel(ctx, t("stats"), "naosoccer.Stats", OBJECT.to_vec())?,
+            pitch: None,
+            bodies: Vec::new(),
+            board_y: 0.0,
+            buf: Vec::with_capacity(4096),
+        })
+    }
+
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// Whether any viewer is subscribed to any of this match's channels.
+    pub fn watched(&self) -> bool {
+        [
+            &self.scene,
+            &self.tf,
+            &self.state,
+            &self.score,
+            &self.events,
+            &self.stats,
+        ]
+        .iter()
+        .any(|c| c.has_sinks())
+    }
+
+    /// Takes the scene (pitch, robot bodies, ball) from `m` at kick-off.
+    pub fn begin(&mut self, m: &Match) {
+        let v: Value = serde_json::from_slice(&scene::scene_update(m)).expect("the scene is JSON");
+        let mut entities = match v.get("entities") {
+            Some(Value::Array(a)) => a.clone(),
+            _ => Vec::new(),
+        };
+        if !entities.is_empty() {
+            self.pitch = Some(entities.remove(0));
+        }
+        self.bodies = entities;
+        self.board_y = m.field().half_width + 0.9;
+    }
+
+    /// Publishes one tick: `state` after it, the events it produced, and
+    /// (when known) the statistics so far.
+    pub fn tick(&mut self, state: &StateRecord, events: &[Event], stats: Option<&MatchStats>) {
+        let now = wall_ns();
+        let meta = PartialMetadata::with_log_time(now);
+        for e in events {
+            if self.events.has_sinks() {
+                if let Ok(b) = serde_json::to_vec(e) {
+                    self.events.log_with_meta(&b, meta);
+                }
+            }
+        }
+        let secs = state.time.max(0.0) as u64;
+        let clock = format!("{:02}:{:02}", secs / 60, secs % 60);
+        let text = format!(
+            "blue {} - {} red   {clock}",
+            state.score.blue, state.score.red
+        );
+        if self.scene.has_sinks() {
+            let mut entities = Vec::with_capacity(self.bodies.len() + 2);
+            if state.tick.is_multiple_of(PITCH_EVERY) {
+                entities.extend(self.pitch.clone());
+            }
+            entities.extend(self.bodies.iter().cloned());
+            entities.push(self.scoreboard(&text));
+            let msg = json!({"deletions": [], "entities": entities});
+            if let Ok(b) = serde_json::to_vec(&msg) {
+                self.scene.log_with_meta(&b, meta);
+            }
+        }
+        if self.tf.has_sinks() {
+            scene::write_transforms(&mut self.buf, now, state);
+            self.tf.log_with_meta(&self.buf, meta);
+        }
+        if self.state.has_sinks() {
+            if let Ok(b) = serde_json::to_vec(state) {
+                self.state.log_with_meta(&b, meta);
+            }
+        }
+        if self.score.has_sinks() {
+            let msg = json!({"tick": state.tick, "time": state.time, "clock": clock,
+                "blue": state.score.blue, "red": state.score.red, "text": text});
+            if let Ok(b) = serde_json::to_vec(&msg) {
+                self.score.log_with_meta(&b, meta);
+            }
+        }
+        if let Some(s) = stats {
+            if self.stats.has_sinks() {
+                if let Ok(b) = serde_json::to_vec(s) {
+                    self.stats.log_with_meta(&b, meta);
+                }
+            }
+        }
+    }
+
+    fn scoreboard(&self, text: &str) -> Value {
+        json!({
+            "timestamp": {"sec": 0, "nsec": 0}, "frame_id": scene::WORLD_FRAME,
+            "id": "scoreboard", "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false,
+            "metadata": [], "arrows": [], "cubes": [], "spheres": [], "cylinders": [],
+            "lines": [], "triangles": [], "models": [],
+            "texts": [{
+                "pose": {"position": {"x": 0.0, "y": self.board_y, "z": 0.6},
+                         "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+                "billboard": true, "font_size": 28.0, "scale_invariant": true,
+                "color": {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0}, "text": text
+            }]
+        })
+    }
+}
+
+/// Real-time pacing: tick `t` is due `t / (control_hz × speed)` seconds
+/// after the start. Only wall-clock waiting; the match never reads it.
+pub struct Pace {
+    start: Instant,
+    tick_secs: f64,
+}
+
+impl Pace {
+    pub fn new(control_hz: f32, speed: f64) -> Pace {
+        Pace {
+            start: Instant::now(),
+            tick_secs: 1.0 / (f64::from(control_hz) * speed),
+        }
+    }
+
+    /// Sleeps until tick `tick` is due.
+    pub fn wait(&self, tick: u64) {
+        let due = self.start + Duration::from_secs_f64(tick as f64 * self.tick_secs);
+        let now = Instant::now();
+        if due > now {
+            std::thread::sleep(due - now);
+        }
+    }
+}
