@@ -303,6 +303,22 @@ impl MatchStream {
     }
 }
 
+impl Drop for MatchStream {
+    /// A match's topics go away with it (a server runs many in turn).
+    fn drop(&mut self) {
+        for c in [
+            &self.scene,
+            &self.tf,
+            &self.state,
+            &self.score,
+            &self.events,
+            &self.stats,
+        ] {
+            c.close();
+        }
+    }
+}
+
 /// Real-time pacing: tick `t` is due `t / (control_hz × speed)` seconds
 /// after the start. Only wall-clock waiting; the match never reads it.
 pub struct Pace {
@@ -324,6 +340,47 @@ impl Pace {
         let now = Instant::now();
         if due > now {
             std::thread::sleep(due - now);
+        }
+    }
+}
+
+/// `server --live`: each server match's stream, fed by the match task.
+pub struct LiveObserver {
+    stream: MatchStream,
+}
+
+impl LiveObserver {
+    /// The observer of server match `id`, its channels advertised from now.
+    pub fn new(server: &LiveServer, id: u64) -> anyhow::Result<LiveObserver> {
+        Ok(LiveObserver {
+            stream: server.stream(id)?,
+        })
+    }
+}
+
+impl naosoccer_server::MatchObserver for LiveObserver {
+    fn on_start(&mut self, _info: &naosoccer_proto::msg::MatchInfo, game: &Match) {
+        self.stream.begin(game);
+        if self.stream.watched() {
+            self.stream
+                .tick(&StateRecord::of(game), &[], Some(&game.stats()));
+        }
+    }
+
+    fn on_tick(&mut self, r: &naosoccer_server::TickRecord<'_>) {
+        if self.stream.watched() {
+            let m = r.game;
+            let stats = m.tick().is_multiple_of(PITCH_EVERY).then(|| m.stats());
+            self.stream
+                .tick(&StateRecord::of(m), r.events, stats.as_ref());
+        }
+    }
+
+    fn on_end(&mut self, end: &naosoccer_proto::msg::MatchEnd, _game: &Match) {
+        if self.stream.stats.has_sinks() {
+            if let Ok(b) = serde_json::to_vec(&end.stats) {
+                self.stream.stats.log(&b);
+            }
         }
     }
 }

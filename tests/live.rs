@@ -275,3 +275,77 @@ async fn replay_live_streams_every_tick_in_order() {
         "identical (180 ticks)"
     );
 }
+
+/// `server --live`: a viewer of a running real-time server match gets its
+/// scene ten times a game second, every tick in order, and the match's
+/// recording is byte for byte the one an unwatched server writes.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn server_live_streams_a_running_match_and_changes_nothing() {
+    let root = std::env::temp_dir().join(format!("naosoccer-live-server-{}", std::process::id()));
+    let (watched, unwatched) = (root.join("watched"), root.join("unwatched"));
+    let server = |dir: &std::path::Path| {
+        vec![
+            "server".to_string(),
+            "--port".into(),
+            "0".into(),
+            "--start-players".into(),
+            "0".into(),
+            "--mode".into(),
+            "realtime".into(),
+            "--minutes".into(),
+            "0.1".into(),
+            "--exit-when-done".into(),
+            "--record-dir".into(),
+            dir.to_str().unwrap().into(),
+        ]
+    };
+    let plain = naosoccer()
+        .args(server(&unwatched))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut args = server(&watched);
+    args.extend(["--live".into(), "127.0.0.1:0".into()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (child, addr) = spawn_live(&args);
+    let mut ws = connect(&addr).await;
+    let ch = advertised(&mut ws, &["/match/1/scene", "/match/1/state"]).await;
+    assert_eq!(ch["/match/1/scene"]["schemaName"], "foxglove.SceneUpdate");
+    subscribe(
+        &mut ws,
+        &[(1, &ch["/match/1/scene"]), (2, &ch["/match/1/state"])],
+    )
+    .await;
+    let (mut scenes, mut ticks) = (0, Vec::<u64>::new());
+    while let Some((sub, v)) = next_data(&mut ws).await {
+        if sub == 1 {
+            let e = v["entities"].as_array().unwrap();
+            let robots = e
+                .iter()
+                .filter(|e| e["id"].as_str().unwrap().starts_with("robot_"));
+            assert_eq!(robots.count(), 8);
+            assert!(e.iter().any(|e| e["id"] == "ball"));
+            scenes += 1;
+        } else {
+            ticks.push(v["tick"].as_u64().unwrap());
+            if ticks.last() == Some(&60) {
+                break;
+            }
+        }
+    }
+    // The viewer came in after the start, but saw most of the 60 ticks, in order.
+    assert!(scenes >= 30, "{scenes} scenes");
+    let first = ticks[0];
+    assert_eq!(ticks, (first..=60).collect::<Vec<_>>());
+    drop(ws);
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    assert!(plain.wait_with_output().unwrap().status.success());
+    let file = "match-1-seed-1.mcap";
+    assert_eq!(
+        std::fs::read(watched.join(file)).unwrap(),
+        std::fs::read(unwatched.join(file)).unwrap(),
+        "a viewer changed the recording"
+    );
+}

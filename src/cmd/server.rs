@@ -68,6 +68,12 @@ pub struct ServerArgs {
     /// Do not record matches.
     #[arg(long)]
     pub no_record: bool,
+    /// Stream every match live to Foxglove or Lichtblick (Foxglove
+    /// WebSocket on ADDR, default 127.0.0.1:8765; topics /match/ID/..., one
+    /// set per match id; docs/RECORDINGS.md). Viewers never slow a match down.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1,
+          default_missing_value = naosoccer::live::DEFAULT_ADDR)]
+    pub live: Option<String>,
     /// Per-connection limits (boxed: they would make every command large).
     #[command(flatten)]
     pub limits: Box<LimitArgs>,
@@ -181,6 +187,11 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
     init_logging();
     let mut cfg = config_from(&args)?;
     let tokens = cfg.resolve_tokens();
+    // Before the server's runtime: the SDK runs its own.
+    let live = match &args.live {
+        Some(addr) => Some(Arc::new(naosoccer::live::LiveServer::start(addr)?)),
+        None => None,
+    };
     let rt = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()?;
@@ -202,6 +213,9 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
         if args.exit_when_done {
             hooks.observer = Some(Arc::new(done_counter(cfg.matches, all_done_tx)));
         }
+        if let Some(live) = live {
+            hooks.observer = Some(Arc::new(with_live(hooks.observer.take(), live)));
+        }
         let shutdown = async move {
             let mut all_done = all_done;
             tokio::select! {
@@ -212,6 +226,24 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
         naosoccer_server::run_with(listener, cfg, hooks, shutdown).await?;
         Ok(())
     })
+}
+
+/// `--live`: `inner`'s observers (if any) plus a live stream per match.
+fn with_live(
+    inner: Option<Arc<naosoccer_server::observer::ObserverFactory>>,
+    live: Arc<naosoccer::live::LiveServer>,
+) -> impl Fn(&naosoccer_proto::msg::MatchInfo) -> Option<Box<dyn MatchObserver>> + Send + Sync {
+    move |info| {
+        let mut all: Vec<Box<dyn MatchObserver>> = Vec::new();
+        if let Some(o) = inner.as_ref().and_then(|f| f(info)) {
+            all.push(o);
+        }
+        match naosoccer::live::LiveObserver::new(&live, info.match_id.0) {
+            Ok(o) => all.push(Box::new(o)),
+            Err(e) => tracing::warn!("match {}: no live stream: {e:#}", info.match_id.0),
+        }
+        Some(Box::new(naosoccer_server::recording::Fanout(all)))
+    }
 }
 
 /// An observer factory whose observers count ended matches among the first `n`.
