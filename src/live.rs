@@ -1,11 +1,11 @@
-//! Live viewing: matches streamed to Foxglove or Lichtblick over the Foxglove
+//! Live viewing: matches streamed to Foxglove over the Foxglove
 //! SDK's WebSocket server (docs/RECORDINGS.md, "Watching live").
 //!
 //! Each match gets its own topics, `/match/{id}/...`: the recording's 3D
 //! scene (`foxglove.SceneUpdate`, JSON, built by `naosoccer_record`'s scene
 //! code) with a scoreboard text above the pitch, the robots' and ball's
 //! transforms (`foxglove.FrameTransforms`), the state, the score and clock,
-//! the referee events and the statistics.
+//! the referee events (also as `foxglove.Log`) and the statistics.
 //!
 //! Watching changes nothing: a stream only reads the match after a tick, on
 //! the match's own thread, and hands the bytes to the SDK, whose per-viewer
@@ -79,7 +79,7 @@ impl LiveServer {
             .start_blocking()
             .with_context(|| format!("starting the live server on {addr}"))?;
         let addr = SocketAddr::new(sock.ip(), handle.port());
-        eprintln!("live: ws://{addr} (open it in Foxglove or Lichtblick: Open connection, Foxglove WebSocket)");
+        eprintln!("live: ws://{addr} (in Foxglove: Open connection, Foxglove WebSocket)");
         Ok(LiveServer {
             ctx,
             handle: Some(handle),
@@ -154,6 +154,8 @@ pub struct MatchStream {
     score: Arc<RawChannel>,
     events: Arc<RawChannel>,
     stats: Arc<RawChannel>,
+    /// The events again as `foxglove.Log`, for Foxglove's Log panel.
+    log: Arc<RawChannel>,
     /// The recording's scene entities: the pitch first, then robots and ball.
     pitch: Option<Value>,
     bodies: Vec<Value>,
@@ -193,6 +195,7 @@ impl MatchStream {
             score: channel(ctx, t("score"), "naosoccer.Score", OBJECT.to_vec())?,
             events: channel(ctx, t("events"), "naosoccer.Event", OBJECT.to_vec())?,
             stats: channel(ctx, t("stats"), "naosoccer.Stats", OBJECT.to_vec())?,
+            log: channel(ctx, t("log"), "foxglove.Log", OBJECT.to_vec())?,
             pitch: None,
             bodies: Vec::new(),
             board_y: 0.0,
@@ -213,6 +216,7 @@ impl MatchStream {
             &self.score,
             &self.events,
             &self.stats,
+            &self.log,
         ]
         .iter()
         .any(|c| c.has_sinks())
@@ -241,6 +245,16 @@ impl MatchStream {
             if self.events.has_sinks() {
                 if let Ok(b) = serde_json::to_vec(e) {
                     self.events.log_with_meta(&b, meta);
+                }
+            }
+            if self.log.has_sinks() {
+                let msg = json!({
+                    "timestamp": {"sec": now / 1_000_000_000, "nsec": now % 1_000_000_000},
+                    "level": 2, "name": format!("match {}", self.id),
+                    "message": serde_json::to_string(e).unwrap_or_default(),
+                    "file": "", "line": 0});
+                if let Ok(b) = serde_json::to_vec(&msg) {
+                    self.log.log_with_meta(&b, meta);
                 }
             }
         }
@@ -313,6 +327,7 @@ impl Drop for MatchStream {
             &self.score,
             &self.events,
             &self.stats,
+            &self.log,
         ] {
             c.close();
         }

@@ -236,19 +236,26 @@ async fn replay_live_streams_every_tick_in_order() {
     let mut ws = connect(&addr).await;
     let ch = advertised(
         &mut ws,
-        &["/match/1/scene", "/match/1/state", "/match/1/events"],
+        &[
+            "/match/1/scene",
+            "/match/1/state",
+            "/match/1/events",
+            "/match/1/log",
+        ],
     )
     .await;
+    assert_eq!(ch["/match/1/log"]["schemaName"], "foxglove.Log");
     subscribe(
         &mut ws,
         &[
             (1, &ch["/match/1/scene"]),
             (2, &ch["/match/1/state"]),
             (3, &ch["/match/1/events"]),
+            (4, &ch["/match/1/log"]),
         ],
     )
     .await;
-    let (mut ticks, mut events, mut scenes) = (Vec::new(), 0, 0);
+    let (mut ticks, mut events, mut scenes, mut logs) = (Vec::new(), 0, 0, 0);
     while let Some((sub, v)) = next_data(&mut ws).await {
         match sub {
             1 => scenes += 1,
@@ -258,9 +265,13 @@ async fn replay_live_streams_every_tick_in_order() {
                     break;
                 }
             }
-            _ => {
+            3 => {
                 assert!(v["kind"].is_string(), "{v}");
                 events += 1;
+            }
+            _ => {
+                assert!(v["message"].as_str().unwrap().contains("\"kind\""), "{v}");
+                logs += 1;
             }
         }
     }
@@ -268,6 +279,7 @@ async fn replay_live_streams_every_tick_in_order() {
     assert_eq!(ticks, (0..=180).collect::<Vec<_>>());
     assert_eq!(scenes, 181);
     assert_eq!(events, recorded_events);
+    assert_eq!(logs, recorded_events);
     let out = child.wait_with_output().unwrap();
     assert_eq!(out.status.code(), Some(0));
     assert_eq!(

@@ -60,7 +60,7 @@ pub struct MatchArgs {
     /// replay FILE` re-simulates it.
     #[arg(long, value_name = "FILE.mcap")]
     record: Option<PathBuf>,
-    /// Stream the match live to Foxglove or Lichtblick (Foxglove WebSocket,
+    /// Stream the match live to Foxglove (Foxglove WebSocket,
     /// topics /match/1/...; docs/RECORDINGS.md) on ADDR, default
     /// 127.0.0.1:8765 (port 0: any free port, printed on stderr), and play it
     /// at real-time pace (see --speed).

@@ -23,7 +23,7 @@ pub struct ReplayArgs {
     /// Print the match statistics stored in the file instead of re-simulating.
     #[arg(long)]
     pub summary: bool,
-    /// First stream the recording live to Foxglove or Lichtblick (Foxglove
+    /// First stream the recording live to Foxglove (Foxglove
     /// WebSocket on ADDR, default 127.0.0.1:8765; topics /match/ID/..., ID
     /// the recorded server match id or 1), every recorded tick in order at
     /// real-time pace (see --speed); then re-simulate and check as usual.

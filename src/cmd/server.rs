@@ -68,7 +68,7 @@ pub struct ServerArgs {
     /// Do not record matches.
     #[arg(long)]
     pub no_record: bool,
-    /// Stream every match live to Foxglove or Lichtblick (Foxglove
+    /// Stream every match live to Foxglove (Foxglove
     /// WebSocket on ADDR, default 127.0.0.1:8765; topics /match/ID/..., one
     /// set per match id; docs/RECORDINGS.md). Viewers never slow a match down.
     #[arg(long, value_name = "ADDR", num_args = 0..=1,
