@@ -1,8 +1,10 @@
 //! One module per subcommand (or family of subcommands).
 pub mod bench;
 pub mod client;
-#[cfg(feature = "learn")]
+pub mod eval;
+#[cfg(feature = "train")]
 pub mod learn;
+pub mod not_built;
 pub mod play;
 pub mod record;
 pub mod server;
