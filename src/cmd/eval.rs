@@ -138,4 +138,3 @@ pub fn eval_cmd(a: EvalArgs) -> anyhow::Result<()> {
     }
     Ok(())
 }
-

@@ -15,8 +15,8 @@ use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBO
 use naosoccer_referee::{Match, MatchConfig};
 
 use crate::obs::{ObsScale, OBS_DIM};
-pub use naosoccer_policy::BatchActor;
 use crate::LearnError;
+pub use naosoccer_policy::BatchActor;
 
 /// Who plays against the learner.
 pub enum Opponent {
@@ -35,7 +35,6 @@ impl Opponent {
         }
     }
 }
-
 
 /// What one finished episode (a whole match) showed.
 #[derive(Debug, Clone, PartialEq)]

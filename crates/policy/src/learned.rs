@@ -24,8 +24,8 @@ use naosoccer_client::Policy;
 use naosoccer_proto::{Action, Observation, PLAYERS_PER_TEAM};
 use serde::{Deserialize, Serialize};
 
-use crate::actions::{argmax, sample, sample_uniform, DecisionConfig, Hold, ACTIONS, SHOOT};
 use crate::actions::MASKED_LOGIT;
+use crate::actions::{argmax, sample, sample_uniform, DecisionConfig, Hold, ACTIONS, SHOOT};
 use crate::mlp::{Activation, Mlp, Weights};
 use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
 use crate::PolicyError;
@@ -292,7 +292,8 @@ impl LearnedPolicy {
                 expected: OBS_VERSION,
             });
         }
-        let mut p = LearnedPolicy::from_weights(&cfg, &Weights::read(&weights)?, format!("{kind}:{path}"))?;
+        let mut p =
+            LearnedPolicy::from_weights(&cfg, &Weights::read(&weights)?, format!("{kind}:{path}"))?;
         p.mode = match kind {
             "ppo" => ActMode::Sample,
             "dqn-epsilon" => ActMode::EpsilonGreedy {
@@ -305,7 +306,11 @@ impl LearnedPolicy {
 
     /// The networks `cfg` describes with the weights `w` (a checkpoint's, or
     /// the trainer's live networks'), acting greedily until told otherwise.
-    pub fn from_weights(cfg: &PlayConfig, w: &Weights, name: String) -> Result<LearnedPolicy, PolicyError> {
+    pub fn from_weights(
+        cfg: &PlayConfig,
+        w: &Weights,
+        name: String,
+    ) -> Result<LearnedPolicy, PolicyError> {
         let scale = cfg.scale();
         let dim = scale.dim();
         let check = |m: Mlp, prefix: &str| -> Result<Mlp, PolicyError> {
@@ -323,7 +328,10 @@ impl LearnedPolicy {
             Ok(m)
         };
         let model = match cfg.algo {
-            Algo::Ppo => Model::Ppo(check(Mlp::from_weights(w, "actor", Activation::Tanh)?, "actor")?),
+            Algo::Ppo => Model::Ppo(check(
+                Mlp::from_weights(w, "actor", Activation::Tanh)?,
+                "actor",
+            )?),
             Algo::Dqn => Model::Dqn(
                 (0..cfg.dqn_nets())
                     .map(|i| {

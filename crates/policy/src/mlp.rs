@@ -52,10 +52,11 @@ impl Weights {
 
     /// Every f32 tensor of a safetensors file's bytes (others are skipped).
     pub fn from_safetensors(bytes: &[u8]) -> Result<Weights, PolicyError> {
-        let st = safetensors::SafeTensors::deserialize(bytes).map_err(|e| PolicyError::Weights {
-            name: "file".into(),
-            reason: format!("not a safetensors file: {e:?}"),
-        })?;
+        let st =
+            safetensors::SafeTensors::deserialize(bytes).map_err(|e| PolicyError::Weights {
+                name: "file".into(),
+                reason: format!("not a safetensors file: {e:?}"),
+            })?;
         let mut w = Weights::default();
         for (name, view) in st.tensors() {
             if view.dtype() != safetensors::Dtype::F32 {
@@ -171,7 +172,9 @@ impl Mlp {
             let bn = format!("{prefix}.l{i}.bias");
             let bias = match w.get(&bn) {
                 Some((s, b)) if s == [output] => b.to_vec(),
-                Some((s, _)) => return Err(bad(format!("{bn} has shape {s:?}, expected [{output}]"))),
+                Some((s, _)) => {
+                    return Err(bad(format!("{bn} has shape {s:?}, expected [{output}]")))
+                }
                 None => return Err(bad(format!("{bn} is missing"))),
             };
             let mut weight_t = vec![0.0; input * output];
@@ -231,9 +234,9 @@ impl Mlp {
                         Activation::Tanh => b[..layer.output]
                             .iter_mut()
                             .for_each(|v| *v = f64::from(*v).tanh() as f32),
-                        Activation::Relu => b[..layer.output]
-                            .iter_mut()
-                            .for_each(|v| *v = v.max(0.0)),
+                        Activation::Relu => {
+                            b[..layer.output].iter_mut().for_each(|v| *v = v.max(0.0))
+                        }
                     }
                 }
                 std::mem::swap(&mut a, &mut b);
@@ -295,9 +298,17 @@ mod tests {
     fn tiny() -> Weights {
         let mut w = Weights::default();
         // l0: 2 -> 3, l1: 3 -> 2.
-        w.insert("n.l0.weight", vec![3, 2], vec![1.0, 2.0, -1.0, 0.5, 0.0, 3.0]);
+        w.insert(
+            "n.l0.weight",
+            vec![3, 2],
+            vec![1.0, 2.0, -1.0, 0.5, 0.0, 3.0],
+        );
         w.insert("n.l0.bias", vec![3], vec![0.5, -0.25, 1.0]);
-        w.insert("n.l1.weight", vec![2, 3], vec![1.0, -1.0, 2.0, 0.0, 1.0, 1.0]);
+        w.insert(
+            "n.l1.weight",
+            vec![2, 3],
+            vec![1.0, -1.0, 2.0, 0.0, 1.0, 1.0],
+        );
         w.insert("n.l1.bias", vec![2], vec![0.0, -1.0]);
         w
     }
