@@ -220,8 +220,10 @@ async fn the_server_fills_empty_slots_with_a_trained_team() {
     let end = &red[0].end;
     assert_eq!(end.reason, EndReason::Finished);
 
-    let mut match_cfg = naosoccer_referee::MatchConfig::default();
-    match_cfg.minutes = 0.25;
+    let match_cfg = naosoccer_referee::MatchConfig {
+        minutes: 0.25,
+        ..Default::default()
+    };
     let policies: Vec<Box<dyn Policy>> = RobotId::all()
         .map(|robot| match robot.team() {
             Team::Blue => naosoccer_policy::load_policy_for_match(&spec, 9).unwrap(),

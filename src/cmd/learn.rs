@@ -6,7 +6,6 @@ use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Context;
 use clap::Args;
 use naosoccer_learn::dqn::{DqnConfig, DqnPreset};
 use naosoccer_learn::ppo::{PpoConfig, Preset};

@@ -4,6 +4,7 @@ pub mod client;
 pub mod eval;
 #[cfg(feature = "train")]
 pub mod learn;
+#[cfg(not(feature = "train"))]
 pub mod not_built;
 pub mod play;
 pub mod record;
