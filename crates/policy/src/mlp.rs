@@ -10,7 +10,9 @@
 //! the order of libtorch's (MKL's) matrix kernel for batches of a few dozen
 //! rows, so on such batches the ReLU networks' outputs equal tch's bit for
 //! bit; tch's kernel for a handful of rows sums in another order, which
-//! moves the last bits (tests/learn_forward.rs measures it). The fused
+//! moves the last bits (crates/learn's
+//! `issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams`
+//! compares the two on every shipped team). The fused
 //! multiply-add is the processor's where it has one (checked at run time)
 //! and the C library's `fmaf` elsewhere: the same correctly rounded result.
 //! `tanh` is computed in double precision and rounded.
