@@ -15,7 +15,7 @@
 //! compares the two on every shipped team). The fused
 //! multiply-add is the processor's where it has one (checked at run time)
 //! and the C library's `fmaf` elsewhere: the same correctly rounded result.
-//! `tanh` is computed in double precision and rounded.
+//! `tanh` is computed in double precision and rounded ([`tanh`]).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -217,80 +217,181 @@ impl Mlp {
     }
 
     /// The outputs of `n` rows: row `i` is `x[i * stride..][..input]`; `out`
-    /// gets `n * output` values, row after row.
+    /// gets `n * output` values, row after row. Rows go through the layers
+    /// [`BLOCK`] at a time (each weight is read once for the block), which
+    /// changes no result: every output is computed as for a row alone.
     pub fn forward(&self, x: &[f32], n: usize, stride: usize, out: &mut Vec<f32>) {
         assert!(stride >= self.input(), "rows hold the network's input");
         assert!(n == 0 || x.len() >= (n - 1) * stride + self.input());
-        let w = self.widest();
-        let (mut a, mut b) = (vec![0.0f32; w], vec![0.0f32; w]);
-        let last = self.layers.len() - 1;
         out.clear();
-        out.reserve(n * self.output());
-        for r in 0..n {
-            let row = &x[r * stride..r * stride + self.input()];
-            for (i, layer) in self.layers.iter().enumerate() {
-                let src: &[f32] = if i == 0 { row } else { &a[..layer.input] };
-                layer.apply(src, &mut b[..layer.output]);
-                if i < last {
-                    match self.act {
-                        Activation::Tanh => b[..layer.output]
-                            .iter_mut()
-                            .for_each(|v| *v = f64::from(*v).tanh() as f32),
-                        Activation::Relu => {
-                            b[..layer.output].iter_mut().for_each(|v| *v = v.max(0.0))
-                        }
-                    }
-                }
-                std::mem::swap(&mut a, &mut b);
+        out.resize(n * self.output(), 0.0);
+        let w = self.widest();
+        let mut a = vec![0.0f32; BLOCK * w];
+        let mut b = vec![0.0f32; BLOCK * w];
+        let mut start = 0;
+        while start < n {
+            let rows = BLOCK.min(n - start);
+            let y = &mut out[start * self.output()..(start + rows) * self.output()];
+            self.forward_block(&x[start * stride..], stride, rows, &mut a, &mut b, y);
+            start += rows;
+        }
+    }
+
+    fn forward_block(
+        &self,
+        x: &[f32],
+        stride: usize,
+        rows: usize,
+        a: &mut Vec<f32>,
+        b: &mut Vec<f32>,
+        out: &mut [f32],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("fma")
+                && std::arch::is_x86_feature_detected!("avx2")
+            {
+                // SAFETY: the processor has FMA and AVX2 (checked just above).
+                unsafe { self.forward_block_avx2(x, stride, rows, a, b, out) };
+                return;
             }
-            out.extend_from_slice(&a[..self.output()]);
+        }
+        self.forward_block_any(x, stride, rows, a, b, out);
+    }
+
+    /// [`Mlp::forward_block_any`] compiled for processors with FMA and
+    /// AVX2, so the fused multiply-adds and the activation are vector
+    /// instructions rather than calls: the same results, many times faster.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn forward_block_avx2(
+        &self,
+        x: &[f32],
+        stride: usize,
+        rows: usize,
+        a: &mut Vec<f32>,
+        b: &mut Vec<f32>,
+        out: &mut [f32],
+    ) {
+        self.forward_block_any(x, stride, rows, a, b, out);
+    }
+
+    #[inline(always)]
+    fn forward_block_any(
+        &self,
+        x: &[f32],
+        stride: usize,
+        rows: usize,
+        a: &mut Vec<f32>,
+        b: &mut Vec<f32>,
+        out: &mut [f32],
+    ) {
+        let last = self.layers.len() - 1;
+        for (i, layer) in self.layers.iter().enumerate() {
+            let o = layer.output;
+            let y: &mut [f32] = if i == last { &mut *out } else { b };
+            if i == 0 {
+                layer.apply(x, stride, rows, y);
+            } else {
+                layer.apply(a, self.layers[i - 1].output, rows, y);
+            }
+            if i < last {
+                let y = &mut y[..rows * o];
+                match self.act {
+                    Activation::Tanh => y.iter_mut().for_each(|v| *v = tanh(*v)),
+                    Activation::Relu => y.iter_mut().for_each(|v| *v = v.max(0.0)),
+                }
+                std::mem::swap(a, b);
+            }
         }
     }
 }
 
+/// Rows a forward pass takes through the layers together.
+pub const BLOCK: usize = 4;
+
 impl Linear {
-    /// `y = W x + b`, each output's products accumulated in input order with
+    /// `y = W x + b` for `rows` rows of `x` (`stride` apart), into `y` (rows
+    /// of `output`): each output's products accumulated in input order with
     /// fused multiply-adds, the bias added last.
-    fn apply(&self, x: &[f32], y: &mut [f32]) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("fma") {
-                // SAFETY: the processor has FMA (checked just above).
-                unsafe { self.accumulate_fma(x, y) };
-                self.add_bias(y);
-                return;
-            }
-        }
-        self.accumulate(x, y);
-        self.add_bias(y);
-    }
-
     #[inline(always)]
-    fn accumulate(&self, x: &[f32], y: &mut [f32]) {
+    fn apply(&self, x: &[f32], stride: usize, rows: usize, y: &mut [f32]) {
         let o = self.output;
-        y.fill(0.0);
-        for (k, &xk) in x.iter().enumerate().take(self.input) {
+        y[..rows * o].fill(0.0);
+        for k in 0..self.input {
             let w = &self.weight_t[k * o..(k + 1) * o];
-            for (yj, &wj) in y.iter_mut().zip(w) {
-                *yj = wj.mul_add(xk, *yj);
+            for r in 0..rows {
+                let xk = x[r * stride + k];
+                for (yj, &wj) in y[r * o..(r + 1) * o].iter_mut().zip(w) {
+                    *yj = wj.mul_add(xk, *yj);
+                }
+            }
+        }
+        for r in 0..rows {
+            for (yj, &bj) in y[r * o..(r + 1) * o].iter_mut().zip(&self.bias) {
+                *yj += bj;
             }
         }
     }
+}
 
-    /// [`Linear::accumulate`] compiled for processors with FMA (and AVX2's
-    /// wider registers), so the fused multiply-adds are vector instructions
-    /// rather than calls: the same results, several times faster.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn accumulate_fma(&self, x: &[f32], y: &mut [f32]) {
-        self.accumulate(x, y);
-    }
+/// `tanh(x)` in double precision, rounded to f32: an odd series near 0,
+/// `1 - 2 / (e^{2|x|} + 1)` elsewhere, with `e^y` from a Cody-Waite
+/// reduction and a Taylor polynomial. Only additions, multiplications and
+/// divisions (no library call, no fused operation), so it is the same on
+/// every machine, and the compiler vectorises it; its error before the
+/// final rounding is around 1e-15, so the f32 result is the correctly
+/// rounded one but in vanishingly rare cases.
+#[inline(always)]
+pub fn tanh(x: f32) -> f32 {
+    let a = f64::from(x).abs().min(10.0);
+    let a2 = a * a;
+    let series = a
+        * (1.0
+            + a2 * (-1.0 / 3.0
+                + a2 * (2.0 / 15.0
+                    + a2 * (-17.0 / 315.0 + a2 * (62.0 / 2835.0 + a2 * (-1382.0 / 155925.0))))));
+    let e = exp_small(2.0 * a);
+    let far = 1.0 - 2.0 / (e + 1.0);
+    let t = if a < 0.0625 { series } else { far };
+    (t as f32).copysign(x)
+}
 
-    fn add_bias(&self, y: &mut [f32]) {
-        for (yj, &bj) in y.iter_mut().zip(&self.bias) {
-            *yj += bj;
-        }
+/// `e^y` for `y` in [0, 20], relative error around 1e-16.
+#[inline(always)]
+fn exp_small(y: f64) -> f64 {
+    const LOG2E: f64 = std::f64::consts::LOG2_E;
+    // ln 2 in two parts: the first has trailing zero bits, so k * LN2_HI
+    // is exact for the k that occur here.
+    const LN2_HI: f64 = 6.931_471_803_691_238_164_9e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+    // Adding 1.5 * 2^52 rounds to an integer held in the low mantissa bits.
+    const MAGIC: f64 = 6_755_399_441_055_744.0;
+    let kk = y * LOG2E + MAGIC;
+    let k = kk - MAGIC;
+    let r = (y - k * LN2_HI) - k * LN2_LO;
+    // Taylor series of e^r, |r| <= ln 2 / 2, to r^13 / 13!.
+    let mut p = 1.0 / 6_227_020_800.0;
+    for c in [
+        1.0 / 479_001_600.0,
+        1.0 / 39_916_800.0,
+        1.0 / 3_628_800.0,
+        1.0 / 362_880.0,
+        1.0 / 40_320.0,
+        1.0 / 5_040.0,
+        1.0 / 720.0,
+        1.0 / 120.0,
+        1.0 / 24.0,
+        1.0 / 6.0,
+        0.5,
+        1.0,
+        1.0,
+    ] {
+        p = p * r + c;
     }
+    // 2^k from the integer in kk's low bits (0 <= k <= 29 here).
+    let scale = f64::from_bits(kk.to_bits().wrapping_add(1023) << 52);
+    p * scale
 }
 
 #[cfg(test)]
@@ -339,6 +440,30 @@ mod tests {
     }
 
     #[test]
+    fn tanh_is_the_correctly_rounded_one() {
+        let mut x = -12.0f32;
+        while x < 12.0 {
+            let want = f64::from(x).tanh() as f32;
+            assert_eq!(tanh(x), want, "tanh({x})");
+            x += 0.000_37;
+        }
+        for x in [
+            0.0f32,
+            -0.0,
+            1e-30,
+            -1e-7,
+            0.0625,
+            0.062_499_996,
+            9.1,
+            50.0,
+            -50.0,
+        ] {
+            assert_eq!(tanh(x), f64::from(x).tanh() as f32, "tanh({x})");
+        }
+        assert!(tanh(-0.0).is_sign_negative());
+    }
+
+    #[test]
     fn rows_are_independent_of_the_batch() {
         let m = Mlp::from_weights(&tiny(), "n", Activation::Tanh).unwrap();
         let x = [0.3, -0.7, 0.1, 0.9, -2.0, 0.4];
@@ -348,6 +473,26 @@ mod tests {
             let mut one = Vec::new();
             m.forward(&x[r * 2..], 1, 2, &mut one);
             assert_eq!(one, all[r * 2..r * 2 + 2]);
+        }
+    }
+
+    #[test]
+    fn blocks_of_rows_and_single_rows_compute_the_same_bits() {
+        // 9 rows: two full blocks and one row alone.
+        let mut w = Weights::default();
+        let v = |n: usize, s: f32| (0..n).map(|i| (i as f32 * s).sin() * 0.7).collect();
+        w.insert("n.l0.weight", vec![16, 16], v(256, 0.37));
+        w.insert("n.l0.bias", vec![16], v(16, 1.3));
+        w.insert("n.l1.weight", vec![3, 16], v(48, 0.11));
+        w.insert("n.l1.bias", vec![3], v(3, 2.1));
+        let m = Mlp::from_weights(&w, "n", Activation::Tanh).unwrap();
+        let x: Vec<f32> = v(9 * 16, 0.013);
+        let mut block = Vec::new();
+        m.forward(&x, 9, 16, &mut block);
+        for r in 0..9 {
+            let mut one = Vec::new();
+            m.forward(&x[r * 16..], 1, 16, &mut one);
+            assert_eq!(one, block[r * 3..r * 3 + 3], "row {r}");
         }
     }
 
