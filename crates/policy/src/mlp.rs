@@ -361,10 +361,10 @@ pub fn tanh(x: f32) -> f32 {
 #[inline(always)]
 fn exp_small(y: f64) -> f64 {
     const LOG2E: f64 = std::f64::consts::LOG2_E;
-    // ln 2 in two parts: the first has trailing zero bits, so k * LN2_HI
-    // is exact for the k that occur here.
-    const LN2_HI: f64 = 6.931_471_803_691_238_164_9e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+    // ln 2 in two parts (fdlibm's): the first has trailing zero bits, so
+    // k * LN2_HI is exact for the k that occur here.
+    const LN2_HI: f64 = f64::from_bits(0x3FE6_2E42_FEE0_0000);
+    const LN2_LO: f64 = f64::from_bits(0x3DEA_39EF_3579_3C76);
     // Adding 1.5 * 2^52 rounds to an integer held in the low mantissa bits.
     const MAGIC: f64 = 6_755_399_441_055_744.0;
     let kk = y * LOG2E + MAGIC;
