@@ -30,14 +30,21 @@ enum Command {
     /// Draw a recording as a top view of the pitch (PNG, or an animated GIF).
     Render(cmd::record::RenderArgs),
     /// Train a DQN or PPO team in process (checkpoints, metrics CSV).
-    #[cfg(feature = "learn")]
+    #[cfg(feature = "train")]
     Train(cmd::learn::TrainArgs),
+    /// Train a DQN or PPO team (needs the `train` feature, libtorch: run it
+    /// for what to build).
+    #[cfg(not(feature = "train"))]
+    Train(cmd::not_built::NotBuilt),
     /// Play many matches between two teams; Table I with 95% CIs.
-    #[cfg(feature = "learn")]
-    Eval(cmd::learn::EvalArgs),
+    Eval(cmd::eval::EvalArgs),
     /// Draw training curves (long-term average reward) as a PNG.
-    #[cfg(feature = "learn")]
+    #[cfg(feature = "train")]
     Plot(cmd::learn::PlotArgs),
+    /// Draw training curves (needs the `train` feature: run it for what to
+    /// build).
+    #[cfg(not(feature = "train"))]
+    Plot(cmd::not_built::NotBuilt),
     /// Benchmarks that print figures.
     #[command(subcommand)]
     Bench(cmd::bench::BenchCommand),
@@ -53,12 +60,15 @@ fn main() -> std::process::ExitCode {
         Command::Server(args) => cmd::server::run(args),
         Command::Client(args) => cmd::client::run(args),
         Command::Bench(b) => cmd::bench::run(b),
-        #[cfg(feature = "learn")]
+        Command::Eval(args) => cmd::eval::eval_cmd(args),
+        #[cfg(feature = "train")]
         Command::Train(args) => cmd::learn::train_cmd(args),
-        #[cfg(feature = "learn")]
-        Command::Eval(args) => cmd::learn::eval_cmd(args),
-        #[cfg(feature = "learn")]
+        #[cfg(feature = "train")]
         Command::Plot(args) => cmd::learn::plot_cmd(args),
+        #[cfg(not(feature = "train"))]
+        Command::Train(args) => cmd::not_built::run("train", args),
+        #[cfg(not(feature = "train"))]
+        Command::Plot(args) => cmd::not_built::run("plot", args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

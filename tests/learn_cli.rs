@@ -1,7 +1,8 @@
 //! The learning subcommands end to end through the real binary: a short
 //! training run, an evaluation of what it wrote, a plot of its metrics, and
-//! clear errors on bad input.
-#![cfg(feature = "learn")]
+//! clear errors on bad input (with the `train` feature); evaluation and
+//! trained teams in matches (in every build); and, in a build without
+//! training, what `train` says to run.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -19,6 +20,7 @@ fn dir(name: &str) -> PathBuf {
     d
 }
 
+#[cfg(feature = "train")]
 #[test]
 fn train_eval_plot_round_trip() {
     let run = dir("cli_ppo_run");
@@ -107,6 +109,7 @@ fn train_eval_plot_round_trip() {
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "a PNG file");
 }
 
+#[cfg(feature = "train")]
 #[test]
 fn bad_input_gives_clear_errors() {
     let out = naosoccer(&["train", "--algo", "sarsa", "--out", "x"]);
@@ -308,5 +311,50 @@ fn match_plays_a_trained_team_and_records_it() {
     assert!(
         err.contains("loading --blue ppo:/nonexistent-run-dir"),
         "{err}"
+    );
+}
+
+/// A build without libtorch still knows `train`, `plot` and `bench learn`,
+/// whatever their arguments, and says exactly what to run instead.
+#[cfg(not(feature = "train"))]
+#[test]
+fn training_commands_without_the_feature_say_what_to_run() {
+    for args in [
+        &["train", "--algo", "ppo", "--out", "runs/x"][..],
+        &["train", "--help"][..],
+        &["plot", "runs/x", "--out", "x.png"][..],
+        &["bench", "learn"][..],
+    ] {
+        let out = naosoccer(args);
+        assert!(!out.status.success(), "{args:?} cannot succeed here");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("needs libtorch"), "{args:?}: {err}");
+        assert!(err.contains("scripts/setup"), "{args:?}: {err}");
+        assert!(
+            err.contains("cargo build --release --features train"),
+            "{args:?}: {err}"
+        );
+        let want = format!("target/release/naosoccer {}", args.join(" "));
+        assert!(err.contains(&want), "{args:?}: {err}");
+    }
+}
+
+/// The default build links no libtorch (issue 14): `ldd` lists none of its
+/// libraries for the binary (where `ldd` exists).
+#[cfg(not(feature = "train"))]
+#[test]
+fn the_default_build_links_no_libtorch() {
+    let Ok(out) = Command::new("ldd")
+        .arg(env!("CARGO_BIN_EXE_naosoccer"))
+        .output()
+    else {
+        eprintln!("no ldd here; nothing to check");
+        return;
+    };
+    let libs = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "ldd failed: {libs}");
+    assert!(
+        !libs.contains("torch") && !libs.contains("libc10"),
+        "the default build links libtorch:\n{libs}"
     );
 }

@@ -1,8 +1,7 @@
 //! A trained team plays over the socket: `naosoccer client --policy ppo:DIR`
-//! (the real binary) joins a real server as blue, the scripted team plays
-//! red, and the match equals the same match played in process with the same
-//! networks, bit for bit.
-#![cfg(feature = "learn")]
+//! (the real binary, which links no libtorch) joins a real server as blue,
+//! the scripted team plays red, and the match equals the same match played
+//! in process with the same networks, bit for bit.
 
 #[path = "server_support.rs"]
 mod support;
@@ -25,41 +24,15 @@ fn naosoccer(args: &[&str]) -> std::process::Output {
         .expect("run naosoccer")
 }
 
-/// A small PPO run written by `naosoccer train` (its weights are whatever a
-/// few updates made of them; what matters here is that they are a real run).
-fn tiny_run() -> PathBuf {
-    let run = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("learn_client_ppo_run");
-    let _ = std::fs::remove_dir_all(&run);
-    let out = naosoccer(&[
-        "train",
-        "--algo",
-        "ppo",
-        "--steps",
-        "1024",
-        "--seed",
-        "5",
-        "--matches",
-        "2",
-        "--rollout",
-        "32",
-        "--epochs",
-        "1",
-        "--minutes",
-        "0.1",
-        "--out",
-        run.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "train failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    run
+/// A shipped trained team (a sampling PPO team: its draws are keyed by the
+/// match seed, so both matches draw alike).
+fn shipped_run() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/policies/ppo-paper-seed1")
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn trained_team_plays_over_the_socket_as_in_process() {
-    let run = tiny_run();
+    let run = shipped_run();
     let spec = format!("ppo:{}", run.display());
 
     let mut cfg = config(100);
@@ -113,7 +86,7 @@ async fn trained_team_plays_over_the_socket_as_in_process() {
     // The same match in process: the same networks for blue, scripted red.
     let policies: Vec<Box<dyn Policy>> = RobotId::all()
         .map(|robot| match robot.team() {
-            Team::Blue => naosoccer_learn::load_policy_for_match(&spec, 42).unwrap(),
+            Team::Blue => naosoccer_policy::load_policy_for_match(&spec, 42).unwrap(),
             Team::Red => PolicyKind::Scripted.build(42, robot),
         })
         .collect();
@@ -175,6 +148,112 @@ fn bad_policy_specs_fail_before_joining() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("unknown policy \"greedy\"") && err.contains("ppo:DIR"),
+        "{err}"
+    );
+}
+
+/// `naosoccer server --fill ppo:DIR` (the real binary): a trained team plays
+/// the slots nobody joined. Red joins over a team connection with the
+/// scripted policy; blue is the server's trained fill; the match equals the
+/// same match in process, bit for bit.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_server_fills_empty_slots_with_a_trained_team() {
+    use std::io::BufRead;
+    use std::process::Stdio;
+
+    let spec = format!("ppo:{}", shipped_run().display());
+    let mut server = Command::new(env!("CARGO_BIN_EXE_naosoccer"))
+        .args([
+            "server",
+            "--port",
+            "0",
+            "--seed",
+            "9",
+            "--minutes",
+            "0.25",
+            "--fill",
+            &spec,
+            "--start-players",
+            "4",
+            "--exit-when-done",
+            "--no-record",
+            "--blue-token",
+            BLUE,
+            "--red-token",
+            RED,
+            "--admin-token",
+            ADMIN,
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start the server");
+    let stdout = server.stdout.take().unwrap();
+    let addr = tokio::task::spawn_blocking(move || {
+        let mut line = String::new();
+        std::io::BufReader::new(stdout)
+            .read_line(&mut line)
+            .unwrap();
+        // "naosoccer server on 127.0.0.1:PORT (lockstep mode, 1 match(es))"
+        line.split_whitespace().nth(3).unwrap().to_owned()
+    })
+    .await
+    .unwrap();
+    let red = run_team(&TeamRun {
+        server: addr,
+        team: Team::Red,
+        token: RED.to_owned(),
+        match_id: Some(MatchId(1)),
+        players: Player::all().collect(),
+        policy: PolicyKind::Scripted.into(),
+        team_connection: true,
+    })
+    .await
+    .unwrap();
+    let status = tokio::task::spawn_blocking(move || server.wait().unwrap())
+        .await
+        .unwrap();
+    assert!(
+        status.success(),
+        "the server exits 0 when its match is done"
+    );
+    let end = &red[0].end;
+    assert_eq!(end.reason, EndReason::Finished);
+
+    let match_cfg = naosoccer_referee::MatchConfig {
+        minutes: 0.25,
+        ..Default::default()
+    };
+    let policies: Vec<Box<dyn Policy>> = RobotId::all()
+        .map(|robot| match robot.team() {
+            Team::Blue => naosoccer_policy::load_policy_for_match(&spec, 9).unwrap(),
+            Team::Red => PolicyKind::Scripted.build(9, robot),
+        })
+        .collect();
+    let out = run_to_end_with(Match::new(&match_cfg, 9).unwrap(), policies, |_, _, _| {});
+    assert_eq!(end.tick, out.ticks);
+    assert_eq!(
+        (end.score.blue, end.score.red),
+        (out.score.blue, out.score.red)
+    );
+    assert_eq!(end.stats, out.stats);
+    assert_eq!(
+        end.state_hash,
+        format!("{:016x}", out.state_hash),
+        "the filled match is the in-process match, bit for bit"
+    );
+
+    let out = naosoccer(&[
+        "server",
+        "--port",
+        "0",
+        "--fill",
+        "ppo:/nonexistent-run-dir",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("loading --fill ppo:/nonexistent-run-dir"),
         "{err}"
     );
 }

@@ -536,6 +536,7 @@ async fn a_panicking_match_ends_alone() {
                 ticks: 0,
             }) as Box<dyn MatchObserver>)
         })),
+        ..Hooks::default()
     };
     let mut cfg = config(60);
     cfg.matches = 0;

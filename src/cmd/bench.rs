@@ -27,8 +27,12 @@ pub enum BenchCommand {
     /// batched forward pass for every robot of every match, the updates
     /// included), then steps the same environment with random actions alone,
     /// and prints both rates. Build with `--release` for meaningful figures.
-    #[cfg(feature = "learn")]
+    #[cfg(feature = "train")]
     Learn(super::learn::BenchLearnArgs),
+    /// PPO training speed (needs the `train` feature, libtorch: run it for
+    /// what to build).
+    #[cfg(not(feature = "train"))]
+    Learn(super::not_built::NotBuilt),
     /// Many lockstep matches at once for a while, with well-behaved,
     /// reconnecting and misbehaving clients mixed in.
     ///
@@ -42,8 +46,10 @@ pub fn run(b: BenchCommand) -> anyhow::Result<()> {
     match b {
         BenchCommand::Sim(args) => super::play::bench_sim(args),
         BenchCommand::Server(args) => super::server::bench(args),
-        #[cfg(feature = "learn")]
+        #[cfg(feature = "train")]
         BenchCommand::Learn(args) => super::learn::bench_learn(args),
+        #[cfg(not(feature = "train"))]
+        BenchCommand::Learn(args) => super::not_built::run("bench learn", args),
         BenchCommand::Soak(args) => super::soak::soak(args),
     }
 }

@@ -2,8 +2,11 @@
 pub mod animate;
 pub mod bench;
 pub mod client;
-#[cfg(feature = "learn")]
+pub mod eval;
+#[cfg(feature = "train")]
 pub mod learn;
+#[cfg(not(feature = "train"))]
+pub mod not_built;
 pub mod play;
 pub mod record;
 pub mod server;

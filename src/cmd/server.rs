@@ -40,9 +40,11 @@ pub struct ServerArgs {
     /// Match configuration TOML [default: the built-in assets/match.toml].
     #[arg(long, value_name = "FILE")]
     pub match_config: Option<PathBuf>,
-    /// Who plays slots no client joined.
-    #[arg(long, value_name = "scripted|idle")]
-    pub fill: Option<Fill>,
+    /// Who plays slots no client joined: scripted, idle, or a trained team
+    /// (ppo:DIR, ppo-greedy:DIR, dqn:DIR, dqn-epsilon:DIR; it plays the
+    /// empty slots of every match, whatever a create_match asks).
+    #[arg(long, value_name = "scripted|idle|ppo:DIR|dqn:DIR")]
+    pub fill: Option<String>,
     /// Robots that must join before a match starts, 0..=8 [default: 8].
     #[arg(long)]
     pub start_players: Option<u8>,
@@ -119,16 +121,16 @@ fn config_from(args: &ServerArgs) -> anyhow::Result<ServerConfig> {
     macro_rules! set {
         ($($field:ident),*) => { $( if let Some(v) = &args.$field { cfg.$field = v.clone(); } )* };
     }
-    set!(
-        bind,
-        port,
-        mode,
-        matches,
-        seed,
-        fill,
-        start_players,
-        deadline_ms
-    );
+    set!(bind, port, mode, matches, seed, start_players, deadline_ms);
+    if let Some(f) = args
+        .fill
+        .as_deref()
+        .filter(|f| !naosoccer_policy::is_learned_spec(f))
+    {
+        cfg.fill = f
+            .parse::<Fill>()
+            .map_err(|e| anyhow::anyhow!("--fill: {e}, or a trained team such as ppo:DIR"))?;
+    }
     if args.match_config.is_some() {
         cfg.match_config = args.match_config.clone();
     }
@@ -186,6 +188,15 @@ pub fn init_logging() {
 pub fn run(args: ServerArgs) -> anyhow::Result<()> {
     init_logging();
     let mut cfg = config_from(&args)?;
+    // A trained fill team is loaded once, here, so a bad spec fails at start;
+    // every match gets a copy (its draws keyed by that match's seed).
+    let learned_fill = match args.fill.as_deref() {
+        Some(f) if naosoccer_policy::is_learned_spec(f) => Some(
+            naosoccer_policy::LearnedPolicy::load(f)
+                .with_context(|| format!("loading --fill {f}"))?,
+        ),
+        _ => None,
+    };
     let tokens = cfg.resolve_tokens();
     // Before the server's runtime: the SDK runs its own.
     let live = match &args.live {
@@ -210,6 +221,13 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
         println!("admin token: {}", tokens.admin);
         let (all_done_tx, all_done) = tokio::sync::watch::channel(false);
         let mut hooks = Hooks::default();
+        if let Some(team) = learned_fill {
+            hooks.fill = Some(Arc::new(move |seed, _robot| {
+                let mut p = team.clone();
+                p.set_match_seed(seed);
+                Box::new(p) as Box<dyn naosoccer_client::Policy>
+            }));
+        }
         if args.exit_when_done {
             hooks.observer = Some(Arc::new(done_counter(cfg.matches, all_done_tx)));
         }
@@ -470,6 +488,7 @@ pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
                 let lat = lat.clone();
                 move |_: &naosoccer_proto::msg::MatchInfo| Some(Box::new(LatencyObserver(lat.clone())) as Box<dyn MatchObserver>)
             })),
+            ..Hooks::default()
         };
         let (el, ticks, errors, misses) = bench_round(rt_cfg.clone(), hooks).await?;
         let mut l = std::mem::take(&mut *lat.0.lock().expect("bench lock"));

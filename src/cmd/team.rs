@@ -65,37 +65,13 @@ impl std::fmt::Display for TeamSpec {
     }
 }
 
-#[cfg(feature = "learn")]
 fn check_learned(spec: &str, what: &str) -> anyhow::Result<()> {
     use anyhow::Context;
-    naosoccer_learn::load_policy(spec).with_context(|| format!("loading {what} {spec}"))?;
+    naosoccer_policy::load_policy(spec).with_context(|| format!("loading {what} {spec}"))?;
     Ok(())
 }
 
-#[cfg(feature = "learn")]
 fn load_learned(spec: &str, seed: u64) -> anyhow::Result<Box<dyn Policy>> {
     use anyhow::Context;
-    // A forward pass of these small networks is fastest on one thread:
-    // libtorch's default OpenMP workers spin between calls, and a match
-    // that asks every tick ran at 11x real time instead of hundreds.
-    tch::set_num_threads(1);
-    naosoccer_learn::load_policy_for_match(spec, seed).with_context(|| format!("loading {spec}"))
-}
-
-#[cfg(not(feature = "learn"))]
-fn no_learning(spec: &str, what: &str) -> anyhow::Error {
-    anyhow::anyhow!(
-        "{what} {spec}: this naosoccer was built without learning support \
-         (--no-default-features); build it with the default features to play trained teams"
-    )
-}
-
-#[cfg(not(feature = "learn"))]
-fn check_learned(spec: &str, what: &str) -> anyhow::Result<()> {
-    Err(no_learning(spec, what))
-}
-
-#[cfg(not(feature = "learn"))]
-fn load_learned(spec: &str, _seed: u64) -> anyhow::Result<Box<dyn Policy>> {
-    Err(no_learning(spec, "team"))
+    naosoccer_policy::load_policy_for_match(spec, seed).with_context(|| format!("loading {spec}"))
 }

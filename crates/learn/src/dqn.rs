@@ -720,16 +720,7 @@ pub fn epsilon_greedy(q: &[f32], shoot_ok: bool, epsilon: f64, rng: &mut ChaCha8
     best
 }
 
-/// Index of the largest value; the first on ties.
-pub fn argmax(v: &[f32]) -> usize {
-    let mut best = 0;
-    for (i, x) in v.iter().enumerate() {
-        if *x > v[best] {
-            best = i;
-        }
-    }
-    best
-}
+pub use naosoccer_policy::actions::argmax;
 
 #[cfg(test)]
 mod tests {

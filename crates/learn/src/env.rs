@@ -16,6 +16,7 @@ use naosoccer_referee::{Match, MatchConfig};
 
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
+pub use naosoccer_policy::BatchActor;
 
 /// Who plays against the learner.
 pub enum Opponent {
@@ -33,14 +34,6 @@ impl Opponent {
             Opponent::Net(_) => None,
         }
     }
-}
-
-/// Picks actions for whole teams of many matches at once.
-pub trait BatchActor: Send {
-    /// `teams[i]` is one match's team: the match seed (which keys sampling
-    /// and per-robot decision state) and its robots' observations in player
-    /// order. `out` gets one action index per observation, in order.
-    fn act_teams(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]);
 }
 
 /// What one finished episode (a whole match) showed.
@@ -196,24 +189,7 @@ impl Mix {
     }
 }
 
-/// The seed of match `index`'s `episode`-th episode: a splitmix64 mix, so
-/// neighbouring matches and episodes get unrelated streams. Its top bit is
-/// always clear: evaluation seeds (`eval::eval_match_seed`) have it set, so
-/// no evaluation replays a training match.
-pub fn episode_seed(seed: u64, index: usize, episode: u64) -> u64 {
-    legacy_episode_seed(seed, index, episode) & !crate::eval::EVAL_SEED_BIT
-}
-
-/// [`episode_seed`] before training and evaluation seeds were separated:
-/// evaluations made then replay with it (`eval --legacy-seeds`).
-pub fn legacy_episode_seed(seed: u64, index: usize, episode: u64) -> u64 {
-    let mut z = seed
-        ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        ^ episode.wrapping_mul(0xD1B5_4A32_D192_ED03);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
+pub use naosoccer_policy::eval::{episode_seed, legacy_episode_seed};
 
 impl VecEnv {
     pub fn new(

@@ -8,6 +8,8 @@ use std::path::PathBuf;
 pub enum LearnError {
     #[error("match: {0}")]
     Match(#[from] naosoccer_referee::MatchError),
+    #[error("{0}")]
+    Policy(#[from] naosoccer_policy::PolicyError),
     #[error("libtorch: {0}")]
     Torch(#[from] tch::TchError),
     #[error("{path}: {source}")]

@@ -1,4 +1,7 @@
-//! Learning: the MDP over `referee::Match`, DQN and PPO on tch.
+//! Learning: the MDP over `referee::Match`, DQN and PPO on tch. The only
+//! crate that links libtorch; playing a trained team needs only
+//! `naosoccer-policy` (re-exported here as [`obs`], [`eval`] and the
+//! [`LearnedPolicy`] the trainer's opponents use).
 //!
 //! - [`obs`]: the observation vector (versioned layout, see docs/LEARNING.md).
 //! - [`env`]: many matches in process, stepped together; the learning team's
@@ -7,7 +10,8 @@
 //!   also with a CleanRL preset).
 //! - [`schedule`]: opponent curricula and the pool of past snapshots.
 //! - [`train`]: training runs (config, metrics CSV, safetensors checkpoints).
-//! - [`policy`]: trained networks as the client's `Policy` ([`load_policy`]).
+//! - [`policy`]: the trainer's networks as players (self-play snapshots,
+//!   frozen opponents), through `naosoccer-policy`'s forward pass.
 //! - [`eval`]: many matches between two teams; Table I with 95% CIs.
 //! - [`plot`]: training curves (Figures 4-6).
 //!
@@ -18,9 +22,7 @@ pub mod adam;
 pub mod dqn;
 pub mod env;
 mod error;
-pub mod eval;
 pub mod nets;
-pub mod obs;
 pub mod plot;
 pub mod policy;
 pub mod ppo;
@@ -28,6 +30,7 @@ pub mod schedule;
 pub mod train;
 
 pub use error::LearnError;
+pub use naosoccer_policy::{eval, obs};
+pub use naosoccer_policy::{load_policy, load_policy_for_match, ActMode, LearnedPolicy};
 pub use obs::{ObsScale, OBS_DIM, OBS_VERSION};
-pub use policy::{load_policy, load_policy_for_match, ActMode, LearnedPolicy};
 pub use train::{train, Algo, OpponentSpec, TrainConfig};

@@ -5,13 +5,7 @@
 use tch::nn::{self, Module};
 use tch::Tensor;
 
-/// Hidden activation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Activation {
-    Tanh,
-    Relu,
-}
+pub use naosoccer_policy::Activation;
 
 /// How weights start.
 #[derive(Debug, Clone, Copy, PartialEq)]

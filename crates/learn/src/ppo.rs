@@ -29,25 +29,7 @@ use crate::nets::{Activation, InitScheme, Mlp};
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
 
-pub const ACTIONS: usize = 5;
-
-/// Index of `shoot` among the actions.
-pub const SHOOT: usize = 3;
-/// Index of `stay`.
-pub const STAY: usize = 4;
-
-/// A logit this low makes an action impossible (its probability underflows to 0).
-const MASKED_LOGIT: f32 = -1e9;
-
-/// The decision-level MDP (`team` preset).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct DecisionConfig {
-    /// Ticks a movement decision (`forward`, turns, `stay`) lasts before the
-    /// robot decides again (a `shoot` lasts as long as the kick keeps it busy).
-    pub persist: u32,
-    /// `shoot` is impossible while the ball is out of kick reach.
-    pub mask_shoot: bool,
-}
+pub use naosoccer_policy::actions::{sample, shoot_mask, DecisionConfig, ACTIONS, SHOOT, STAY};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -300,18 +282,6 @@ pub fn rows_tensor(rows: &[f32], n: usize, width: usize, dim: usize) -> Tensor {
     } else {
         x.narrow(1, 0, dim as i64).contiguous()
     }
-}
-
-/// Additive logit masks for `n` rows: 0, or [`MASKED_LOGIT`] on `shoot`
-/// where `shoot_ok` is false.
-pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
-    let mut m = vec![0.0; shoot_ok.len() * ACTIONS];
-    for (i, &ok) in shoot_ok.iter().enumerate() {
-        if !ok {
-            m[i * ACTIONS + SHOOT] = MASKED_LOGIT;
-        }
-    }
-    m
 }
 
 /// The clipped surrogate objective, as a loss to minimise:
@@ -880,19 +850,6 @@ impl Transitions {
         let ret = adv.iter().zip(&self.values).map(|(a, v)| a + v).collect();
         (adv, ret)
     }
-}
-
-/// Inverse-CDF sampling from a probability row with a uniform `u` in [0, 1).
-pub fn sample(probs: &[f32], u: f32) -> usize {
-    let total: f32 = probs.iter().sum();
-    let mut acc = 0.0;
-    for (i, p) in probs.iter().enumerate() {
-        acc += p / total;
-        if u < acc {
-            return i;
-        }
-    }
-    probs.len() - 1
 }
 
 /// Fisher-Yates with our own RNG, so minibatches repeat with the seed.

@@ -28,32 +28,7 @@ use crate::ppo::{Ppo, PpoConfig, Rollout, Transitions, ACTIONS};
 use crate::schedule::ScheduleRunner;
 use crate::LearnError;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Algo {
-    Dqn,
-    Ppo,
-}
-
-impl std::fmt::Display for Algo {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Algo::Dqn => "dqn",
-            Algo::Ppo => "ppo",
-        })
-    }
-}
-
-impl std::str::FromStr for Algo {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "dqn" => Ok(Algo::Dqn),
-            "ppo" => Ok(Algo::Ppo),
-            o => Err(format!("unknown algorithm {o:?} (expected dqn or ppo)")),
-        }
-    }
-}
+pub use naosoccer_policy::Algo;
 
 /// Who the learner plays against during training.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -396,10 +371,10 @@ pub fn self_play_snapshot(
     cfg: &TrainConfig,
     weights: Option<&[&tch::nn::VarStore]>,
 ) -> Result<LearnedPolicy, LearnError> {
-    let mut p = LearnedPolicy::untrained(cfg, "self-play".into());
-    if let Some(w) = weights {
-        p.copy_from(w)?;
-    }
+    let mut p = match weights {
+        Some(w) => crate::policy::from_stores(cfg, w, "self-play".into())?,
+        None => crate::policy::untrained(cfg, "self-play".into())?,
+    };
     p.set_mode(match cfg.algo {
         Algo::Ppo => ActMode::Sample,
         Algo::Dqn => ActMode::Greedy,

@@ -149,7 +149,7 @@ fn checkpoints_load_to_identical_outputs() {
         let a = LearnedPolicy::load(&format!("{algo}:{}", dir.display())).unwrap();
         let b =
             LearnedPolicy::load(&format!("{algo}:{}", summary.final_weights.display())).unwrap();
-        let fresh = LearnedPolicy::untrained(&cfg, "fresh".into());
+        let fresh = naosoccer_learn::policy::untrained(&cfg, "fresh".into()).unwrap();
         for player in 0..4 {
             let (ya, yb, yf) = (
                 a.outputs(&rows, player),
@@ -165,7 +165,7 @@ fn checkpoints_load_to_identical_outputs() {
         // Saving what was loaded writes the same weights again.
         let again = dir.join("again.safetensors");
         a.save(&again).unwrap();
-        let mut c = LearnedPolicy::untrained(&cfg, "c".into());
+        let mut c = naosoccer_learn::policy::untrained(&cfg, "c".into()).unwrap();
         c.load_weights(&again).unwrap();
         assert_eq!(c.outputs(&rows, 2), a.outputs(&rows, 2));
         let ckpt = dir.join(format!("checkpoints/step-{}.safetensors", 64 * 8 * 4));
@@ -229,7 +229,7 @@ fn sampled_actions_do_not_depend_on_batching() {
     tch::manual_seed(5);
     let cfg = tiny_config(Algo::Ppo, 5);
     let fresh = |seed: u64| {
-        let mut p = LearnedPolicy::untrained(&cfg, "sampler".into());
+        let mut p = naosoccer_learn::policy::untrained(&cfg, "sampler".into()).unwrap();
         p.set_mode(ActMode::Sample);
         p.set_match_seed(seed);
         p
@@ -414,7 +414,21 @@ fn issue_13_refreshed_self_play_snapshots_sample_like_the_learner() {
     let x = tch::Tensor::from_slice(&rows).view([16, OBS_DIM as i64]);
     let mut want = vec![0.0f32; 16 * 5];
     live.net.logits(&x).copy_data(&mut want, 16 * 5);
-    assert_eq!(refreshed.outputs(&rows, 0), want, "the live weights");
+    // The snapshot plays through the torch-free forward pass: the live
+    // weights' outputs to float precision (a fresh network's differ by far
+    // more).
+    let got = refreshed.outputs(&rows, 0);
+    let worst = got
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 1e-5, "the live weights: outputs differ by {worst}");
+    let fresh = first.outputs(&rows, 0);
+    assert!(
+        fresh.iter().zip(&want).any(|(a, b)| (a - b).abs() > 1e-3),
+        "the first snapshot is another (untrained) network"
+    );
 
     let dqn = tiny_config(Algo::Dqn, 13);
     assert_eq!(
@@ -488,11 +502,12 @@ fn team_policies_decide_alike_however_they_are_asked() {
     let dir = out_dir("team_policy_weights");
     std::fs::create_dir_all(&dir).unwrap();
     let weights = dir.join("w.safetensors");
-    LearnedPolicy::untrained(&cfg, "w".into())
+    naosoccer_learn::policy::untrained(&cfg, "w".into())
+        .unwrap()
         .save(&weights)
         .unwrap();
     let loaded = || {
-        let mut p = LearnedPolicy::untrained(&cfg, "team".into());
+        let mut p = naosoccer_learn::policy::untrained(&cfg, "team".into()).unwrap();
         p.load_weights(&weights).unwrap();
         p.set_mode(ActMode::Sample);
         p.set_match_seed(31);
@@ -708,7 +723,7 @@ fn epsilon_greedy_never_draws_a_masked_shoot() {
     tch::set_num_threads(1);
     let mut cfg = tiny_config(Algo::Dqn, 7);
     cfg.dqn = naosoccer_learn::dqn::DqnConfig::team();
-    let mut p = LearnedPolicy::untrained(&cfg, "eps".into());
+    let mut p = naosoccer_learn::policy::untrained(&cfg, "eps".into()).unwrap();
     p.set_mode(ActMode::EpsilonGreedy { epsilon: 1.0 });
     let n = 500;
     let players: Vec<usize> = (0..n).map(|i| i % 4).collect();
@@ -744,4 +759,171 @@ fn epsilon_greedy_never_draws_a_masked_shoot() {
         in_reach_counts.iter().all(|&c| c > 0),
         "{in_reach_counts:?}"
     );
+}
+
+/// Observations of whole matches: every robot of both teams, every tick, of
+/// `matches` half-minute matches between the scripted team and a random one
+/// (so the robots are spread over the pitch, lying, kicking, near and far
+/// from the ball), as each robot received them.
+fn recorded_observations(matches: u64) -> Vec<naosoccer_proto::Observation> {
+    use naosoccer_proto::{Action, RobotId, Team, ROBOTS};
+    use naosoccer_referee::Match;
+    let cfg = MatchConfig {
+        minutes: 0.5,
+        ..MatchConfig::default()
+    };
+    let mut out = Vec::new();
+    for seed in 1..=matches {
+        let mut m = Match::new(&cfg, seed).unwrap();
+        let mut policies: Vec<_> = RobotId::all()
+            .map(|r| match r.team() {
+                Team::Blue => PolicyKind::Scripted.build(seed, r),
+                Team::Red => PolicyKind::Random.build(seed, r),
+            })
+            .collect();
+        let mut obs: Vec<_> = (0..ROBOTS)
+            .map(|_| naosoccer_referee::blank_observation())
+            .collect();
+        while !m.is_finished() {
+            let mut acts = [Action::Stay; ROBOTS];
+            for r in RobotId::all() {
+                m.observe_into(r.team(), r.player(), &mut obs[r.index()]);
+                acts[r.index()] = policies[r.index()].act(&obs[r.index()]);
+            }
+            out.extend(obs.iter().cloned());
+            m.step(&acts);
+        }
+    }
+    out
+}
+
+/// Issue 14: the torch-free forward pass (`naosoccer-policy`, what every
+/// trained team plays with) against tch's, for every shipped team over
+/// thousands of recorded observations: the outputs agree to 1e-5, and the
+/// greedy and the sampled actions (the same draws) are the same. tch runs
+/// the whole set as one batch and again four rows (a team) at a time.
+#[test]
+fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
+    use naosoccer_learn::dqn::QNet;
+    use naosoccer_learn::policy::sample_uniform;
+    use naosoccer_learn::ppo::{rows_tensor, shoot_mask, ActorCritic, ACTIONS};
+    use naosoccer_policy::actions::{argmax, sample};
+    use tch::{Kind, Tensor};
+
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let obs = recorded_observations(2);
+    assert!(obs.len() >= 4000, "{} observations", obs.len());
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/policies");
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(&root)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.join("final.safetensors").exists())
+        .collect();
+    dirs.sort();
+    assert!(dirs.len() >= 15, "every shipped team: {dirs:?}");
+    for dir in &dirs {
+        let cfg: TrainConfig =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("config.json")).unwrap())
+                .unwrap();
+        let spec = format!("{}:{}", cfg.algo, dir.display());
+        let pure = LearnedPolicy::load(&spec).unwrap();
+        let scale = pure.scale();
+        let dim = scale.dim();
+        let n = obs.len();
+        let mut rows = vec![0.0f32; n * OBS_DIM];
+        for (o, row) in obs.iter().zip(rows.chunks_exact_mut(OBS_DIM)) {
+            scale.encode(o, row);
+        }
+        let masks = pure.decision().is_some_and(|d| d.mask_shoot) && scale.version >= 2;
+        let shoot_ok: Vec<bool> = rows
+            .chunks_exact(OBS_DIM)
+            .map(|r| !masks || r[12] > 0.5)
+            .collect();
+        let weights = dir.join("final.safetensors");
+        // tch's outputs for rows [a, b) of the network of `player`.
+        let ppo = (cfg.algo == Algo::Ppo).then(|| {
+            let mut ac = ActorCritic::for_run(&cfg.ppo, &scale, cfg.learners.len());
+            ac.vs.load(&weights).unwrap();
+            ac
+        });
+        let nets: Vec<QNet> = if cfg.algo == Algo::Dqn {
+            let k = if cfg.dqn.shared {
+                1
+            } else {
+                cfg.learners.len()
+            };
+            (0..k)
+                .map(|i| {
+                    let mut q = QNet::with_input(dim, &cfg.dqn.hidden, &format!("q{i}"));
+                    q.vs.load(&weights).unwrap();
+                    q
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let tch_out = |net: usize, a: usize, b: usize| -> Vec<f32> {
+            let x = rows_tensor(&rows[a * OBS_DIM..b * OBS_DIM], b - a, OBS_DIM, dim);
+            let y = tch::no_grad(|| match &ppo {
+                Some(ac) => ac.logits(&x),
+                None => nets[net].q(&x),
+            });
+            let mut v = vec![0.0f32; (b - a) * ACTIONS];
+            y.to_kind(Kind::Float).copy_data(&mut v, (b - a) * ACTIONS);
+            v
+        };
+        let players = if nets.len() > 1 { nets.len() } else { 1 };
+        let mut worst = 0.0f32;
+        for player in 0..players {
+            let net = if nets.len() > 1 { player } else { 0 };
+            let want_player = cfg.learners.get(player).copied().unwrap_or(0);
+            let ours = pure.outputs(&rows, want_player);
+            let whole = tch_out(net, 0, n);
+            let mut teams = Vec::with_capacity(n * ACTIONS);
+            for a in (0..n).step_by(4) {
+                teams.extend(tch_out(net, a, (a + 4).min(n)));
+            }
+            for theirs in [&whole, &teams] {
+                for (x, y) in ours.iter().zip(theirs.iter()) {
+                    worst = worst.max((x - y).abs());
+                }
+                // Greedy: the largest (allowed) output.
+                for i in 0..n {
+                    let mut a = ours[i * ACTIONS..(i + 1) * ACTIONS].to_vec();
+                    let mut b = theirs[i * ACTIONS..(i + 1) * ACTIONS].to_vec();
+                    if !shoot_ok[i] {
+                        a[3] = f32::NEG_INFINITY;
+                        b[3] = f32::NEG_INFINITY;
+                    }
+                    assert_eq!(argmax(&a), argmax(&b), "{spec}: greedy action of row {i}");
+                }
+            }
+            // Sampled (PPO): tch's softmax of the masked logits, drawn with
+            // the same numbers as the torch-free team draws with.
+            if ppo.is_some() {
+                let probs = pure.probabilities(&rows);
+                let mask =
+                    Tensor::from_slice(&shoot_mask(&shoot_ok)).view([n as i64, ACTIONS as i64]);
+                let logits = Tensor::from_slice(&whole).view([n as i64, ACTIONS as i64]) + mask;
+                let mut p = vec![0.0f32; n * ACTIONS];
+                logits
+                    .softmax(-1, Kind::Float)
+                    .copy_data(&mut p, n * ACTIONS);
+                for (i, o) in obs.iter().enumerate() {
+                    let u = sample_uniform(7, o.team.index(), o.player as usize, o.tick);
+                    assert_eq!(
+                        sample(&probs[i * ACTIONS..(i + 1) * ACTIONS], u),
+                        sample(&p[i * ACTIONS..(i + 1) * ACTIONS], u),
+                        "{spec}: sampled action of row {i}"
+                    );
+                }
+            }
+        }
+        eprintln!("{spec}: {n} observations, largest difference from tch {worst:e}");
+        assert!(
+            worst <= 1e-5,
+            "{spec}: outputs differ from tch's by {worst}"
+        );
+    }
 }

@@ -97,14 +97,18 @@ impl MatchTask {
         info: watch::Sender<MatchInfo>,
         shutdown: watch::Receiver<bool>,
         observer: Option<Box<dyn MatchObserver>>,
+        custom_fill: Option<Vec<Box<dyn Policy>>>,
     ) -> MatchTask {
         let kind = match params.fill {
             Fill::Scripted => PolicyKind::Scripted,
             Fill::Idle => PolicyKind::Idle,
         };
-        let fillers = RobotId::all()
-            .map(|r| Some(kind.build(params.seed, r)))
-            .collect();
+        let fillers = match custom_fill {
+            Some(policies) => policies.into_iter().map(Some).collect(),
+            None => RobotId::all()
+                .map(|r| Some(kind.build(params.seed, r)))
+                .collect(),
+        };
         let obs_scratch = game.observe(Team::Blue, 0);
         MatchTask {
             params,

@@ -36,16 +36,25 @@ pub trait MatchObserver: Send {
 /// Makes an observer for each new match, or `None` to leave it unobserved.
 pub type ObserverFactory = dyn Fn(&MatchInfo) -> Option<Box<dyn MatchObserver>> + Send + Sync;
 
+/// Makes the policy that plays robot `RobotId`'s slot, if nobody joins it,
+/// in a match of the given seed.
+pub type FillFactory =
+    dyn Fn(u64, naosoccer_proto::RobotId) -> Box<dyn naosoccer_client::Policy> + Send + Sync;
+
 /// Extension points of a server.
 #[derive(Clone, Default)]
 pub struct Hooks {
     pub observer: Option<Arc<ObserverFactory>>,
+    /// Plays the slots nobody joined, in every match, instead of the
+    /// match's `fill` (`naosoccer server --fill ppo:DIR`: a trained team).
+    pub fill: Option<Arc<FillFactory>>,
 }
 
 impl std::fmt::Debug for Hooks {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Hooks")
             .field("observer", &self.observer.is_some())
+            .field("fill", &self.fill.is_some())
             .finish()
     }
 }

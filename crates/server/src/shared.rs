@@ -188,7 +188,20 @@ impl Shared {
         let (tx, rx) = mpsc::channel(MATCH_QUEUE);
         let hook = self.hooks.observer.as_ref().and_then(|f| f(&info));
         let observer = crate::recording::observer_for(&self.config, hook, &info);
-        let task = MatchTask::new(params, game, rx, info_tx, self.shutdown.clone(), observer);
+        let fillers = self.hooks.fill.as_ref().map(|f| {
+            naosoccer_proto::RobotId::all()
+                .map(|r| f(params.seed, r))
+                .collect()
+        });
+        let task = MatchTask::new(
+            params,
+            game,
+            rx,
+            info_tx,
+            self.shutdown.clone(),
+            observer,
+            fillers,
+        );
         let done = self.done.clone();
         tokio::spawn(async move {
             task.run().await;

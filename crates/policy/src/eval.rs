@@ -6,7 +6,7 @@
 //! Optionally half the matches swap the sides, and each team is still
 //! reported under its own name. Match seeds come from their own derivation
 //! ([`eval_match_seed`]): they have the top bit set and training seeds
-//! (`env::episode_seed`) have it clear, so an evaluation never replays a
+//! ([`episode_seed`]) have it clear, so an evaluation never replays a
 //! match a training run saw.
 //!
 //! Matches run side by side; a trained team decides for all its robots in all
@@ -16,9 +16,8 @@ use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::{Action, MatchStats, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 
-use crate::env::legacy_episode_seed;
-use crate::policy::LearnedPolicy;
-use crate::LearnError;
+use crate::learned::LearnedPolicy;
+use crate::PolicyError;
 
 /// One side of an evaluation.
 pub enum Side {
@@ -29,13 +28,13 @@ pub enum Side {
 impl Side {
     /// `scripted` | `scripted:KEY=VAL,...` | `scripted:FILE.toml` | `random`
     /// | `idle` | `ppo:DIR` | `dqn:DIR` (and the other trained-team specs).
-    pub fn parse(spec: &str) -> Result<Side, LearnError> {
+    pub fn parse(spec: &str) -> Result<Side, PolicyError> {
         if !naosoccer_client::is_builtin_spec(spec) {
             return Ok(Side::Learned(Box::new(LearnedPolicy::load(spec)?)));
         }
         spec.parse::<PolicyKind>()
             .map(Side::Builtin)
-            .map_err(|e| LearnError::Spec {
+            .map_err(|e| PolicyError::Spec {
                 spec: spec.to_string(),
                 reason: format!("{e}; or ppo:DIR, dqn:DIR"),
             })
@@ -48,7 +47,7 @@ pub enum SeedScheme {
     /// [`eval_match_seed`]: never a training match's seed.
     #[default]
     Eval,
-    /// `env::legacy_episode_seed(seed, i, 0)`, the seed of training match
+    /// [`legacy_episode_seed`]`(seed, i, 0)`, the seed of training match
     /// `i`'s first episode before the two were separated: it replays
     /// evaluations made then.
     Legacy,
@@ -87,6 +86,25 @@ pub fn eval_match_seed(seed: u64, index: usize) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     (z ^ (z >> 31)) | EVAL_SEED_BIT
+}
+
+/// The seed of training match `index`'s `episode`-th episode: a splitmix64
+/// mix, so neighbouring matches and episodes get unrelated streams. Its top
+/// bit is always clear: evaluation seeds ([`eval_match_seed`]) have it set,
+/// so no evaluation replays a training match.
+pub fn episode_seed(seed: u64, index: usize, episode: u64) -> u64 {
+    legacy_episode_seed(seed, index, episode) & !EVAL_SEED_BIT
+}
+
+/// [`episode_seed`] before training and evaluation seeds were separated:
+/// evaluations made then replay with it (`eval --legacy-seeds`).
+pub fn legacy_episode_seed(seed: u64, index: usize, episode: u64) -> u64 {
+    let mut z = seed
+        ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ episode.wrapping_mul(0xD1B5_4A32_D192_ED03);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
 }
 
 /// How an evaluation is played.
@@ -154,7 +172,7 @@ pub fn play_matches(
     second: &mut Side,
     plan: &EvalPlan,
     threads: usize,
-) -> Result<Vec<MatchResult>, LearnError> {
+) -> Result<Vec<MatchResult>, PolicyError> {
     let mut slots = Vec::with_capacity(plan.matches);
     for i in 0..plan.matches {
         let m = Match::new(cfg, plan.seeds.match_seed(plan.seed, i))?;
@@ -537,7 +555,6 @@ mod tests {
 
     #[test]
     fn evaluation_seeds_never_meet_training_seeds() {
-        use crate::env::episode_seed;
         let mut eval = std::collections::BTreeSet::new();
         for seed in 0..8 {
             for i in 0..200 {

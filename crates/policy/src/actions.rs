@@ -1,0 +1,175 @@
+//! The action table and how a network's outputs become actions: the five
+//! discrete actions, the decision-level MDP's holds, the sampling draws and
+//! the inverse-CDF sampler. Training (crates/learn) and play share them, so
+//! a team decides in play exactly as it did in training.
+
+use naosoccer_proto::Observation;
+use serde::{Deserialize, Serialize};
+
+/// Discrete actions, in `proto::Action::from_index` order: forward, turn
+/// left, turn right, shoot, stay.
+pub const ACTIONS: usize = 5;
+
+/// Index of `shoot` among the actions.
+pub const SHOOT: usize = 3;
+/// Index of `stay`.
+pub const STAY: usize = 4;
+
+/// A logit this low makes an action impossible (its probability underflows to 0).
+pub const MASKED_LOGIT: f32 = -1e9;
+
+/// The decision-level MDP (`team` presets).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DecisionConfig {
+    /// Ticks a movement decision (`forward`, turns, `stay`) lasts before the
+    /// robot decides again (a `shoot` lasts as long as the kick keeps it busy).
+    pub persist: u32,
+    /// `shoot` is impossible while the ball is out of kick reach.
+    pub mask_shoot: bool,
+}
+
+/// The uniform number in [0, 1) a sampling robot uses at `tick`: a hash of
+/// the match seed, the robot's team and player and the tick, so it does not
+/// depend on how robots are batched or in which order they are asked.
+pub fn sample_uniform(match_seed: u64, team: usize, player: usize, tick: u64) -> f32 {
+    let mut z = match_seed ^ 0x6A09_E667_F3BC_C909;
+    for v in [team as u64, player as u64, tick] {
+        z = z.wrapping_add(v).wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+    }
+    (z >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// Inverse-CDF sampling from a probability row with a uniform `u` in [0, 1).
+pub fn sample(probs: &[f32], u: f32) -> usize {
+    let total: f32 = probs.iter().sum();
+    let mut acc = 0.0;
+    for (i, p) in probs.iter().enumerate() {
+        acc += p / total;
+        if u < acc {
+            return i;
+        }
+    }
+    probs.len() - 1
+}
+
+/// Index of the largest value; the first on ties.
+pub fn argmax(v: &[f32]) -> usize {
+    let mut best = 0;
+    for (i, x) in v.iter().enumerate() {
+        if *x > v[best] {
+            best = i;
+        }
+    }
+    best
+}
+
+/// Additive logit masks for `n` rows: 0, or [`MASKED_LOGIT`] on `shoot`
+/// where `shoot_ok` is false.
+pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
+    let mut m = vec![0.0; shoot_ok.len() * ACTIONS];
+    for (i, &ok) in shoot_ok.iter().enumerate() {
+        if !ok {
+            m[i * ACTIONS + SHOOT] = MASKED_LOGIT;
+        }
+    }
+    m
+}
+
+/// One robot's decision state in the decision-level MDP (`team` preset):
+/// the action it holds and until which tick. The trainer and
+/// [`crate::LearnedPolicy`] both use it, so a team decides in play exactly
+/// when it decided in training, in process or over the socket.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Hold {
+    action: usize,
+    until: u64,
+    last_tick: Option<u64>,
+}
+
+impl Hold {
+    /// Whether the robot that received `obs` decides now: it is free to act
+    /// (not lying, not busy in a kick) and its last decision's persistence
+    /// has run out. A tick earlier than the last one seen is a new match.
+    pub fn must_decide(&mut self, obs: &Observation) -> bool {
+        if self.last_tick.is_some_and(|t| obs.tick < t) {
+            *self = Hold::default();
+        }
+        self.last_tick = Some(obs.tick);
+        is_free(obs) && obs.tick >= self.until
+    }
+
+    /// The action of a robot that does not decide now: what it holds while
+    /// free, `stay` while lying or kicking (its action is ignored then).
+    pub fn held(&self, obs: &Observation) -> usize {
+        if is_free(obs) {
+            self.action
+        } else {
+            STAY
+        }
+    }
+
+    /// Records a decision at `tick`: a movement lasts `persist` ticks, a
+    /// `shoot` one (the kick then keeps the robot busy).
+    pub fn start(&mut self, action: usize, tick: u64, persist: u32) {
+        self.action = action;
+        let ticks = if action == SHOOT {
+            1
+        } else {
+            u64::from(persist.max(1))
+        };
+        self.until = tick + ticks;
+    }
+
+    /// Forgets the hold (the episode ended).
+    pub fn reset(&mut self) {
+        *self = Hold::default();
+    }
+}
+
+/// Not lying and not in a kick.
+pub fn is_free(obs: &Observation) -> bool {
+    let me = obs.me();
+    !me.fallen && !me.busy
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn argmax_takes_the_first_of_ties() {
+        assert_eq!(argmax(&[0.0, 3.0, 3.0, -1.0]), 1);
+    }
+
+    #[test]
+    fn sampling_follows_the_cumulative_distribution() {
+        let p = [0.1, 0.2, 0.3, 0.4, 0.0];
+        assert_eq!(sample(&p, 0.0), 0);
+        assert_eq!(sample(&p, 0.05), 0);
+        assert_eq!(sample(&p, 0.15), 1);
+        assert_eq!(sample(&p, 0.45), 2);
+        assert_eq!(sample(&p, 0.99), 3);
+        // Unnormalised rows are normalised first.
+        assert_eq!(sample(&[2.0, 2.0], 0.49), 0);
+        assert_eq!(sample(&[2.0, 2.0], 0.51), 1);
+    }
+
+    #[test]
+    fn draws_are_uniform_and_keyed_by_seed_team_player_and_tick() {
+        let mut sum = 0.0f64;
+        for t in 0..10_000 {
+            let u = sample_uniform(3, 0, 1, t);
+            assert!((0.0..1.0).contains(&u));
+            sum += f64::from(u);
+        }
+        assert!((sum / 10_000.0 - 0.5).abs() < 0.02);
+        let u = sample_uniform(3, 0, 1, 5);
+        assert_ne!(u, sample_uniform(4, 0, 1, 5));
+        assert_ne!(u, sample_uniform(3, 1, 1, 5));
+        assert_ne!(u, sample_uniform(3, 0, 2, 5));
+        assert_ne!(u, sample_uniform(3, 0, 1, 6));
+    }
+}

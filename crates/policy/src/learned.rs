@@ -1,0 +1,650 @@
+//! Trained networks as players: [`LearnedPolicy`] implements the client's
+//! `Policy` (so the robot client loop plays it over the socket) and plays
+//! whole teams of many matches in one call ([`LearnedPolicy::act_matches`],
+//! what evaluation and the trainer's opponents use).
+//!
+//! How a network picks an action ([`ActMode`]): a PPO team samples from its
+//! policy distribution (`ppo:DIR`, the trained policy as it was trained) or
+//! takes the most likely action (`ppo-greedy:DIR`); a DQN team takes the
+//! largest Q-value (`dqn:DIR`) or acts epsilon-greedily with its training
+//! run's epsilon (`dqn-epsilon:DIR`). Sampling draws one number per robot and
+//! tick from a counter-based hash of (match seed, team, player, tick), so a
+//! sampled match is the same in process, over robot connections or over a
+//! team connection, whatever the batching (the forward pass, see
+//! [`crate::mlp`], does not depend on the batch either).
+//!
+//! A run directory holds `config.json` (the training configuration, which
+//! says how the networks read observations and act) and `final.safetensors`
+//! (or, while a run is going, `checkpoints/step-N.safetensors`).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use naosoccer_client::Policy;
+use naosoccer_proto::{Action, Observation, PLAYERS_PER_TEAM};
+use serde::{Deserialize, Serialize};
+
+use crate::actions::MASKED_LOGIT;
+use crate::actions::{argmax, sample, sample_uniform, DecisionConfig, Hold, ACTIONS, SHOOT};
+use crate::mlp::{Activation, Mlp, Weights};
+use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
+use crate::PolicyError;
+
+/// The learning algorithm a run used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Algo {
+    Dqn,
+    Ppo,
+}
+
+impl std::fmt::Display for Algo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Algo::Dqn => "dqn",
+            Algo::Ppo => "ppo",
+        })
+    }
+}
+
+impl std::str::FromStr for Algo {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "dqn" => Ok(Algo::Dqn),
+            "ppo" => Ok(Algo::Ppo),
+            o => Err(format!("unknown algorithm {o:?} (expected dqn or ppo)")),
+        }
+    }
+}
+
+/// What playing needs of a run's `config.json` (the trainer's
+/// `TrainConfig`; its other fields are ignored here).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct PlayConfig {
+    pub algo: Algo,
+    /// Players the networks were trained on, in the order of the per-robot
+    /// DQN networks.
+    pub learners: Vec<usize>,
+    pub obs_version: u32,
+    pub obs_scale: ObsScale,
+    #[serde(default)]
+    pub ppo: PpoPlay,
+    #[serde(default)]
+    pub dqn: DqnPlay,
+}
+
+/// The PPO fields playing reads.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+pub struct PpoPlay {
+    #[serde(default)]
+    pub decision: Option<DecisionConfig>,
+}
+
+/// The DQN fields playing reads; missing ones take the `paper` preset's
+/// values, as the trainer's configuration does.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(default)]
+pub struct DqnPlay {
+    pub shared: bool,
+    pub epsilon: f64,
+    pub decision: Option<DecisionConfig>,
+}
+
+impl Default for DqnPlay {
+    fn default() -> Self {
+        DqnPlay {
+            shared: false,
+            epsilon: 0.3,
+            decision: None,
+        }
+    }
+}
+
+impl PlayConfig {
+    /// Reads a run's `config.json`.
+    pub fn read(path: &Path) -> Result<PlayConfig, PolicyError> {
+        let text = std::fs::read_to_string(path).map_err(|e| PolicyError::io(path, e))?;
+        serde_json::from_str(&text).map_err(|e| PolicyError::Json {
+            path: path.to_path_buf(),
+            source: e,
+        })
+    }
+
+    /// The observation encoding: the scale under the run's layout version.
+    pub fn scale(&self) -> ObsScale {
+        let mut s = self.obs_scale;
+        s.version = self.obs_version;
+        s
+    }
+
+    /// The decision-level MDP the run trained in, if any.
+    pub fn decision(&self) -> Option<DecisionConfig> {
+        match self.algo {
+            Algo::Ppo => self.ppo.decision,
+            Algo::Dqn => self.dqn.decision,
+        }
+    }
+
+    /// How many DQN networks the run has (one per learner unless shared).
+    pub fn dqn_nets(&self) -> usize {
+        if self.dqn.shared {
+            1
+        } else {
+            self.learners.len()
+        }
+    }
+}
+
+/// How a trained network turns its outputs into an action.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ActMode {
+    /// The largest output (PPO: most likely action; DQN: largest Q-value).
+    Greedy,
+    /// PPO only: an action drawn from the softmax of the logits.
+    Sample,
+    /// With probability `epsilon` a uniformly random action, else greedy
+    /// (DQN's behaviour policy in training).
+    EpsilonGreedy { epsilon: f32 },
+}
+
+/// Feature index of `ball_in_reach` in layout version 2.
+const IN_REACH_FEATURE: usize = 12;
+
+#[derive(Debug, Clone)]
+enum Model {
+    /// PPO's actor (the critic plays no part in playing).
+    Ppo(Mlp),
+    /// One network per entry of `learners`, or one shared.
+    Dqn(Vec<Mlp>),
+}
+
+/// A trained team policy.
+#[derive(Clone)]
+pub struct LearnedPolicy {
+    name: String,
+    cfg: PlayConfig,
+    /// The weights the networks were built from (what [`LearnedPolicy::save`] writes).
+    weights: Weights,
+    scale: ObsScale,
+    learners: Vec<usize>,
+    model: Model,
+    mode: ActMode,
+    /// Seeds sampling (`ActMode::Sample`); the match seed when playing one match.
+    match_seed: u64,
+    /// Calls of the unkeyed batch path ([`LearnedPolicy::act_rows_players`]),
+    /// which key their samples by this counter instead of a tick.
+    calls: u64,
+    feats: Vec<f32>,
+    rows: Vec<f32>,
+    out: Vec<f32>,
+    players: Vec<usize>,
+    keys: Vec<f32>,
+    /// The decision-level MDP the team was trained in, if any.
+    decision: Option<DecisionConfig>,
+    /// Per robot (match seed, team, player) decision state.
+    holds: BTreeMap<(u64, usize, usize), Hold>,
+}
+
+impl std::fmt::Debug for LearnedPolicy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LearnedPolicy")
+            .field("name", &self.name)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Loads `ppo:DIR`, `ppo-greedy:DIR`, `dqn:DIR` (a run directory) or
+/// `ppo:FILE.safetensors` (a checkpoint inside a run directory) as a boxed
+/// `Policy`, sampling (if it samples) as in a match of seed 0.
+pub fn load_policy(spec: &str) -> Result<Box<dyn Policy>, PolicyError> {
+    load_policy_for_match(spec, 0)
+}
+
+/// As [`load_policy`], for a match of seed `match_seed`: the policy the
+/// in-process runner, the server's fill and `naosoccer client` build for
+/// each match.
+pub fn load_policy_for_match(spec: &str, match_seed: u64) -> Result<Box<dyn Policy>, PolicyError> {
+    let mut p = LearnedPolicy::load(spec)?;
+    p.set_match_seed(match_seed);
+    Ok(Box::new(p))
+}
+
+/// Where a run directory keeps its configuration and weights.
+pub fn resolve_run(path: &Path) -> Result<(PathBuf, PathBuf), PolicyError> {
+    if path.extension().is_some_and(|e| e == "safetensors") {
+        // checkpoints/step-N.safetensors -> the run directory two levels up.
+        let mut dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        if !dir.join("config.json").exists() {
+            dir = dir.parent().map(Path::to_path_buf).unwrap_or_default();
+        }
+        return Ok((dir.join("config.json"), path.to_path_buf()));
+    }
+    let cfg = path.join("config.json");
+    let fin = path.join("final.safetensors");
+    if fin.exists() {
+        return Ok((cfg, fin));
+    }
+    latest_checkpoint(path)
+        .map(|c| (cfg, c))
+        .ok_or_else(|| PolicyError::Spec {
+            spec: path.display().to_string(),
+            reason: "no final.safetensors and no checkpoints/step-*.safetensors in it".into(),
+        })
+}
+
+fn latest_checkpoint(dir: &Path) -> Option<PathBuf> {
+    let rd = std::fs::read_dir(dir.join("checkpoints")).ok()?;
+    let mut best: Option<(u64, PathBuf)> = None;
+    for e in rd.flatten() {
+        let p = e.path();
+        let Some(n) = p
+            .file_name()
+            .and_then(|n| n.to_str())
+            .and_then(|n| n.strip_prefix("step-"))
+            .and_then(|n| n.strip_suffix(".safetensors"))
+            .and_then(|n| n.parse::<u64>().ok())
+        else {
+            continue;
+        };
+        if best.as_ref().is_none_or(|(b, _)| n > *b) {
+            best = Some((n, p));
+        }
+    }
+    best.map(|(_, p)| p)
+}
+
+/// Whether `spec` names a trained team (`ppo:`, `ppo-greedy:`, `dqn:`,
+/// `dqn-epsilon:`), as opposed to a built-in one.
+pub fn is_learned_spec(spec: &str) -> bool {
+    spec.split_once(':')
+        .is_some_and(|(k, _)| matches!(k, "ppo" | "ppo-greedy" | "dqn" | "dqn-epsilon"))
+}
+
+impl LearnedPolicy {
+    /// Parses `algo:PATH` and loads it; the algorithm must match the run's.
+    pub fn load(spec: &str) -> Result<LearnedPolicy, PolicyError> {
+        let bad = |reason: &str| PolicyError::Spec {
+            spec: spec.to_string(),
+            reason: reason.to_string(),
+        };
+        let (kind, path) = spec
+            .split_once(':')
+            .ok_or_else(|| bad("expected ppo:DIR, ppo-greedy:DIR, dqn:DIR or dqn-epsilon:DIR"))?;
+        let algo = match kind {
+            "ppo" | "ppo-greedy" => Algo::Ppo,
+            "dqn" | "dqn-epsilon" => Algo::Dqn,
+            other => {
+                return Err(bad(&format!(
+                    "unknown kind {other:?} (expected ppo, ppo-greedy, dqn or dqn-epsilon)"
+                )))
+            }
+        };
+        let (cfg_path, weights) = resolve_run(Path::new(path))?;
+        let cfg = PlayConfig::read(&cfg_path)?;
+        if cfg.algo != algo {
+            return Err(bad(&format!("{} was trained with {}", path, cfg.algo)));
+        }
+        if layout_dim(cfg.obs_version).is_none() {
+            return Err(PolicyError::ObsVersion {
+                path: cfg_path,
+                found: cfg.obs_version,
+                expected: OBS_VERSION,
+            });
+        }
+        let mut p =
+            LearnedPolicy::from_weights(&cfg, &Weights::read(&weights)?, format!("{kind}:{path}"))?;
+        p.mode = match kind {
+            "ppo" => ActMode::Sample,
+            "dqn-epsilon" => ActMode::EpsilonGreedy {
+                epsilon: cfg.dqn.epsilon as f32,
+            },
+            _ => ActMode::Greedy,
+        };
+        Ok(p)
+    }
+
+    /// The networks `cfg` describes with the weights `w` (a checkpoint's, or
+    /// the trainer's live networks'), acting greedily until told otherwise.
+    pub fn from_weights(
+        cfg: &PlayConfig,
+        w: &Weights,
+        name: String,
+    ) -> Result<LearnedPolicy, PolicyError> {
+        let scale = cfg.scale();
+        let dim = scale.dim();
+        let check = |m: Mlp, prefix: &str| -> Result<Mlp, PolicyError> {
+            if m.input() != dim || m.output() != ACTIONS {
+                return Err(PolicyError::Weights {
+                    name: format!("{prefix}.*"),
+                    reason: format!(
+                        "a network {} -> {}, expected {dim} -> {ACTIONS} (observation layout v{})",
+                        m.input(),
+                        m.output(),
+                        cfg.obs_version
+                    ),
+                });
+            }
+            Ok(m)
+        };
+        let model = match cfg.algo {
+            Algo::Ppo => Model::Ppo(check(
+                Mlp::from_weights(w, "actor", Activation::Tanh)?,
+                "actor",
+            )?),
+            Algo::Dqn => Model::Dqn(
+                (0..cfg.dqn_nets())
+                    .map(|i| {
+                        let prefix = format!("q{i}");
+                        check(Mlp::from_weights(w, &prefix, Activation::Relu)?, &prefix)
+                    })
+                    .collect::<Result<_, _>>()?,
+            ),
+        };
+        Ok(LearnedPolicy {
+            name,
+            cfg: cfg.clone(),
+            weights: w.clone(),
+            scale,
+            learners: cfg.learners.clone(),
+            model,
+            mode: ActMode::Greedy,
+            match_seed: 0,
+            calls: 0,
+            feats: vec![0.0; OBS_DIM],
+            rows: Vec::new(),
+            out: Vec::new(),
+            players: Vec::new(),
+            keys: Vec::new(),
+            decision: cfg.decision(),
+            holds: BTreeMap::new(),
+        })
+    }
+
+    /// Replaces the networks' weights (a self-play snapshot's refresh, or a
+    /// checkpoint of the same run); mode, seed and holds are kept.
+    pub fn set_weights(&mut self, w: &Weights) -> Result<(), PolicyError> {
+        let fresh = LearnedPolicy::from_weights(&self.cfg, w, String::new())?;
+        self.model = fresh.model;
+        self.weights = fresh.weights;
+        Ok(())
+    }
+
+    /// [`LearnedPolicy::set_weights`] from a safetensors file.
+    pub fn load_weights(&mut self, path: &Path) -> Result<(), PolicyError> {
+        self.set_weights(&Weights::read(path)?)
+    }
+
+    /// Writes the weights the networks were built from.
+    pub fn save(&self, path: &Path) -> Result<(), PolicyError> {
+        self.weights.write(path)
+    }
+
+    /// The run configuration the team plays by.
+    pub fn config(&self) -> &PlayConfig {
+        &self.cfg
+    }
+
+    /// The decision-level MDP this team plays in (`None`: it decides every tick).
+    pub fn decision(&self) -> Option<DecisionConfig> {
+        self.decision
+    }
+
+    /// Whether `shoot` is masked while the ball is out of reach (read from
+    /// the `ball_in_reach` feature of layout version 2).
+    fn masks_shoot(&self) -> bool {
+        self.decision.is_some_and(|d| d.mask_shoot) && self.scale.version >= 2
+    }
+
+    /// Actions for whole teams: `teams[i]` is a match's seed and its team's
+    /// observations; `out` gets one action index per observation, in order.
+    /// This is how the team plays everywhere (robot and team connections,
+    /// evaluation, the trainer's opponents): sampling draws from
+    /// [`sample_uniform`]`(match seed, team, player, tick)`, and under the
+    /// decision-level MDP each robot (keyed by match seed, team and player)
+    /// decides only when free and when its last decision's persistence ran
+    /// out, holding its action in between.
+    pub fn act_matches(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]) {
+        let n: usize = teams.iter().map(|t| t.1.len()).sum();
+        assert!(out.len() >= n, "one action per observation");
+        let mut feats = std::mem::take(&mut self.feats);
+        let mut players = std::mem::take(&mut self.players);
+        let mut keys = std::mem::take(&mut self.keys);
+        feats.clear();
+        players.clear();
+        keys.clear();
+        // Rows that decide now: (index into out, hold key, tick).
+        let mut deciding: Vec<(usize, (u64, usize, usize), u64)> = Vec::with_capacity(n);
+        let mut i = 0;
+        for &(seed, obs) in teams {
+            for o in obs {
+                let key = (seed, o.team.index(), o.player as usize % PLAYERS_PER_TEAM);
+                let decides = match self.decision {
+                    None => true,
+                    Some(_) => {
+                        let h = self.holds.entry(key).or_default();
+                        let d = h.must_decide(o);
+                        if !d {
+                            out[i] = h.held(o);
+                        }
+                        d
+                    }
+                };
+                if decides {
+                    let row = feats.len();
+                    feats.resize(row + OBS_DIM, 0.0);
+                    self.scale.encode(o, &mut feats[row..row + OBS_DIM]);
+                    players.push(key.2);
+                    keys.push(sample_uniform(seed, key.1, key.2, o.tick));
+                    deciding.push((i, key, o.tick));
+                }
+                i += 1;
+            }
+        }
+        if !deciding.is_empty() {
+            let mut acts = vec![0usize; deciding.len()];
+            self.act_rows_keyed(&feats, &players, &keys, &mut acts);
+            for (&(at, key, tick), &a) in deciding.iter().zip(&acts) {
+                out[at] = a;
+                if let Some(d) = self.decision {
+                    self.holds.entry(key).or_default().start(a, tick, d.persist);
+                }
+            }
+        }
+        // Robots of matches no longer played are forgotten now and then.
+        if self.holds.len() > 4096 {
+            self.holds
+                .retain(|k, _| teams.iter().any(|&(seed, _)| seed == k.0));
+        }
+        self.feats = feats;
+        self.players = players;
+        self.keys = keys;
+    }
+
+    pub fn mode(&self) -> ActMode {
+        self.mode
+    }
+
+    /// Greedy or sampled actions (sampling needs a PPO network).
+    pub fn set_mode(&mut self, mode: ActMode) {
+        self.mode = mode;
+    }
+
+    /// The seed sampling draws from in `Policy::act`: the match's seed.
+    pub fn set_match_seed(&mut self, seed: u64) {
+        self.match_seed = seed;
+    }
+
+    /// Actions for rows of observation vectors; `players[i]` is the player
+    /// number of row `i`. A sampling policy keys its draws by an internal
+    /// call counter here (deterministic for a fixed sequence of calls); use
+    /// [`LearnedPolicy::act_rows_keyed`] to key them by match and tick.
+    pub fn act_rows_players(&mut self, obs: &[f32], players: &[usize], out: &mut [usize]) {
+        let mut keys = std::mem::take(&mut self.keys);
+        keys.clear();
+        if self.mode != ActMode::Greedy {
+            let call = self.calls;
+            keys.extend((0..out.len()).map(|i| sample_uniform(self.match_seed, i, 0, call)));
+        }
+        self.calls += 1;
+        self.act_rows_keyed(obs, players, &keys, out);
+        self.keys = keys;
+    }
+
+    /// Actions for rows of observation vectors; `players[i]` is the player
+    /// number of row `i` and `uniforms[i]` its draw from
+    /// [`sample_uniform`] (unused, and may be empty, when greedy).
+    pub fn act_rows_keyed(
+        &mut self,
+        obs: &[f32],
+        players: &[usize],
+        uniforms: &[f32],
+        out: &mut [usize],
+    ) {
+        self.decide(obs, players, uniforms, out);
+        if let ActMode::EpsilonGreedy { epsilon } = self.mode {
+            let masks = self.masks_shoot();
+            for (i, (a, &u)) in out.iter_mut().zip(uniforms).enumerate() {
+                if u < epsilon {
+                    // Given u < epsilon, u / epsilon is uniform on [0, 1):
+                    // a uniform draw among the actions allowed, which
+                    // leaves out a masked `shoot` (ball out of reach).
+                    let masked = masks && obs[i * OBS_DIM + IN_REACH_FEATURE] <= 0.5;
+                    let allowed = if masked { ACTIONS - 1 } else { ACTIONS };
+                    let k = ((u / epsilon * allowed as f32) as usize).min(allowed - 1);
+                    *a = if masked && k >= SHOOT { k + 1 } else { k };
+                }
+            }
+        }
+    }
+
+    fn decide(&mut self, obs: &[f32], players: &[usize], uniforms: &[f32], out: &mut [usize]) {
+        let n = out.len();
+        let masks = self.masks_shoot();
+        let shoot_ok = |i: usize| !masks || obs[i * OBS_DIM + IN_REACH_FEATURE] > 0.5;
+        match &self.model {
+            Model::Ppo(actor) => {
+                actor.forward(obs, n, OBS_DIM, &mut self.out);
+                let sample_it = self.mode == ActMode::Sample;
+                for (i, o) in out.iter_mut().enumerate() {
+                    let row = &mut self.out[i * ACTIONS..(i + 1) * ACTIONS];
+                    if !shoot_ok(i) {
+                        row[SHOOT] += MASKED_LOGIT;
+                    }
+                    *o = if sample_it {
+                        softmax(row);
+                        sample(row, uniforms[i])
+                    } else {
+                        argmax(row)
+                    };
+                }
+            }
+            Model::Dqn(nets) => {
+                for (k, net) in nets.iter().enumerate() {
+                    self.rows.clear();
+                    let mut idx = Vec::new();
+                    for i in 0..n {
+                        if net_index(&self.learners, nets.len(), players[i]) == k {
+                            idx.push(i);
+                            self.rows
+                                .extend_from_slice(&obs[i * OBS_DIM..(i + 1) * OBS_DIM]);
+                        }
+                    }
+                    if idx.is_empty() {
+                        continue;
+                    }
+                    net.forward(&self.rows, idx.len(), OBS_DIM, &mut self.out);
+                    for (j, &i) in idx.iter().enumerate() {
+                        let row = &mut self.out[j * ACTIONS..(j + 1) * ACTIONS];
+                        if !shoot_ok(i) {
+                            row[SHOOT] = f32::NEG_INFINITY;
+                        }
+                        out[i] = argmax(row);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The raw network outputs for the rows of `obs` (each [`OBS_DIM`]
+    /// wide): PPO's action logits, or DQN's Q-values (of the network of
+    /// player `player`), `n * 5` values.
+    pub fn outputs(&self, obs: &[f32], player: usize) -> Vec<f32> {
+        let n = obs.len() / OBS_DIM;
+        let mut out = Vec::new();
+        match &self.model {
+            Model::Ppo(actor) => actor.forward(obs, n, OBS_DIM, &mut out),
+            Model::Dqn(nets) => nets[net_index(&self.learners, nets.len(), player)]
+                .forward(obs, n, OBS_DIM, &mut out),
+        }
+        out
+    }
+
+    /// The action probabilities of a PPO team for the rows of `obs`
+    /// (softmax of the logits, `shoot` masked as in play), `n * 5` values.
+    pub fn probabilities(&self, obs: &[f32]) -> Vec<f32> {
+        let mut p = self.outputs(obs, 0);
+        let masks = self.masks_shoot();
+        for (i, row) in p.chunks_exact_mut(ACTIONS).enumerate() {
+            if masks && obs[i * OBS_DIM + IN_REACH_FEATURE] <= 0.5 {
+                row[SHOOT] += MASKED_LOGIT;
+            }
+            softmax(row);
+        }
+        p
+    }
+
+    pub fn scale(&self) -> ObsScale {
+        self.scale
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+}
+
+/// `row` replaced by its softmax: `exp(x - max)` (computed in double
+/// precision and rounded), divided by their sum.
+pub fn softmax(row: &mut [f32]) {
+    let max = row.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let mut sum = 0.0f32;
+    for v in row.iter_mut() {
+        *v = f64::from(*v - max).exp() as f32;
+        sum += *v;
+    }
+    for v in row.iter_mut() {
+        *v /= sum;
+    }
+}
+
+/// The DQN network for `player`: per-robot networks follow the training
+/// run's `learners` order; a player that did not learn uses the first.
+fn net_index(learners: &[usize], nets: usize, player: usize) -> usize {
+    if nets <= 1 {
+        return 0;
+    }
+    learners.iter().position(|&p| p == player).unwrap_or(0)
+}
+
+impl Policy for LearnedPolicy {
+    fn act(&mut self, obs: &Observation) -> Action {
+        let mut out = [0usize];
+        let seed = self.match_seed;
+        self.act_matches(&[(seed, std::slice::from_ref(obs))], &mut out);
+        Action::from_index(out[0]).unwrap_or(Action::Stay)
+    }
+
+    fn act_batch(&mut self, obs: &[Observation], out: &mut [Action]) {
+        let n = obs.len().min(out.len());
+        let mut acts = vec![0usize; n];
+        let seed = self.match_seed;
+        self.act_matches(&[(seed, &obs[..n])], &mut acts);
+        for (o, a) in out.iter_mut().zip(acts) {
+            *o = Action::from_index(a).unwrap_or(Action::Stay);
+        }
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+}

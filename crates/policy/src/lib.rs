@@ -1,0 +1,46 @@
+//! Trained teams as players, without libtorch: everything playing a
+//! `naosoccer train` run needs, and nothing training needs.
+//!
+//! - [`obs`]: the observation vector (versioned layout, see docs/LEARNING.md).
+//! - [`actions`]: the action table, the decision-level MDP's holds, the
+//!   sampling draws.
+//! - [`mlp`]: the networks' forward pass in plain Rust, read from the
+//!   safetensors checkpoints the trainer writes.
+//! - [`learned`]: a trained team as the client's `Policy`
+//!   ([`load_policy`]), and as a batch player of many matches at once.
+//! - [`eval`]: many matches between two teams; Table I with 95% CIs.
+//!
+//! crates/learn (tch) trains the networks and depends on this crate; this
+//! crate never depends on it, so every command that only plays links no
+//! libtorch.
+
+pub mod actions;
+mod error;
+pub mod eval;
+pub mod learned;
+pub mod mlp;
+pub mod obs;
+
+use naosoccer_proto::Observation;
+
+pub use actions::{DecisionConfig, ACTIONS, SHOOT, STAY};
+pub use error::PolicyError;
+pub use learned::{
+    is_learned_spec, load_policy, load_policy_for_match, ActMode, Algo, LearnedPolicy, PlayConfig,
+};
+pub use mlp::{Activation, Mlp, Weights};
+pub use obs::{ObsScale, OBS_DIM, OBS_VERSION};
+
+/// Picks actions for whole teams of many matches at once.
+pub trait BatchActor: Send {
+    /// `teams[i]` is one match's team: the match seed (which keys sampling
+    /// and per-robot decision state) and its robots' observations in player
+    /// order. `out` gets one action index per observation, in order.
+    fn act_teams(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]);
+}
+
+impl BatchActor for LearnedPolicy {
+    fn act_teams(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]) {
+        self.act_matches(teams, out);
+    }
+}
