@@ -156,9 +156,10 @@ pub struct MatchStream {
     stats: Arc<RawChannel>,
     /// The events again as `foxglove.Log`, for Foxglove's Log panel.
     log: Arc<RawChannel>,
-    /// The recording's scene entities: the pitch first, then robots and ball.
-    pitch: Option<Value>,
-    bodies: Vec<Value>,
+    /// The recording's scene entities, serialised once at kick-off: the
+    /// pitch, and the robots and ball (frame-locked: the transforms move them).
+    pitch: Vec<u8>,
+    bodies: Vec<u8>,
     /// Where the scoreboard floats: above the far touch line.
     board_y: f32,
     buf: Vec<u8>,
@@ -196,7 +197,7 @@ impl MatchStream {
             events: channel(ctx, t("events"), "naosoccer.Event", OBJECT.to_vec())?,
             stats: channel(ctx, t("stats"), "naosoccer.Stats", OBJECT.to_vec())?,
             log: channel(ctx, t("log"), "foxglove.Log", OBJECT.to_vec())?,
-            pitch: None,
+            pitch: Vec::new(),
             bodies: Vec::new(),
             board_y: 0.0,
             buf: Vec::with_capacity(4096),
@@ -230,9 +231,15 @@ impl MatchStream {
             _ => Vec::new(),
         };
         if !entities.is_empty() {
-            self.pitch = Some(entities.remove(0));
+            self.pitch = serde_json::to_vec(&entities.remove(0)).expect("JSON");
         }
-        self.bodies = entities;
+        self.bodies.clear();
+        for (i, e) in entities.iter().enumerate() {
+            if i > 0 {
+                self.bodies.push(b',');
+            }
+            serde_json::to_writer(&mut self.bodies, e).expect("JSON");
+        }
         self.board_y = m.field().half_width + 0.9;
     }
 
@@ -265,16 +272,23 @@ impl MatchStream {
             state.score.blue, state.score.red
         );
         if self.scene.has_sinks() {
-            let mut entities = Vec::with_capacity(self.bodies.len() + 2);
-            if state.tick.is_multiple_of(PITCH_EVERY) {
-                entities.extend(self.pitch.clone());
+            // {"deletions":[],"entities":[pitch?, bodies, scoreboard]}, the
+            // static parts as bytes serialised once.
+            let b = &mut self.buf;
+            b.clear();
+            b.extend_from_slice(br#"{"deletions":[],"entities":["#);
+            if state.tick.is_multiple_of(PITCH_EVERY) && !self.pitch.is_empty() {
+                b.extend_from_slice(&self.pitch);
+                b.push(b',');
             }
-            entities.extend(self.bodies.iter().cloned());
-            entities.push(self.scoreboard(&text));
-            let msg = json!({"deletions": [], "entities": entities});
-            if let Ok(b) = serde_json::to_vec(&msg) {
-                self.scene.log_with_meta(&b, meta);
+            if !self.bodies.is_empty() {
+                b.extend_from_slice(&self.bodies);
+                b.push(b',');
             }
+            let board = scoreboard(self.board_y, &text);
+            serde_json::to_writer(&mut *b, &board).expect("JSON");
+            b.extend_from_slice(b"]}");
+            self.scene.log_with_meta(b, meta);
         }
         if self.tf.has_sinks() {
             scene::write_transforms(&mut self.buf, now, state);
@@ -300,21 +314,22 @@ impl MatchStream {
             }
         }
     }
+}
 
-    fn scoreboard(&self, text: &str) -> Value {
-        json!({
-            "timestamp": {"sec": 0, "nsec": 0}, "frame_id": scene::WORLD_FRAME,
-            "id": "scoreboard", "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false,
-            "metadata": [], "arrows": [], "cubes": [], "spheres": [], "cylinders": [],
-            "lines": [], "triangles": [], "models": [],
-            "texts": [{
-                "pose": {"position": {"x": 0.0, "y": self.board_y, "z": 0.6},
-                         "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
-                "billboard": true, "font_size": 28.0, "scale_invariant": true,
-                "color": {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0}, "text": text
-            }]
-        })
-    }
+/// The scoreboard: a text that always faces the camera, above `y`.
+fn scoreboard(y: f32, text: &str) -> Value {
+    json!({
+        "timestamp": {"sec": 0, "nsec": 0}, "frame_id": scene::WORLD_FRAME,
+        "id": "scoreboard", "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false,
+        "metadata": [], "arrows": [], "cubes": [], "spheres": [], "cylinders": [],
+        "lines": [], "triangles": [], "models": [],
+        "texts": [{
+            "pose": {"position": {"x": 0.0, "y": y, "z": 0.6},
+                     "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+            "billboard": true, "font_size": 28.0, "scale_invariant": true,
+            "color": {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0}, "text": text
+        }]
+    })
 }
 
 impl Drop for MatchStream {

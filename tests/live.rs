@@ -62,8 +62,15 @@ async fn connect(addr: &str) -> Ws {
 /// Reads control messages until every topic in `want` is advertised;
 /// returns the advertised channels by topic.
 async fn advertised(ws: &mut Ws, want: &[&str]) -> std::collections::BTreeMap<String, Value> {
+    // A match's channels are created one after the other, and the SDK may
+    // advertise one a moment before it takes subscriptions for it: wait for
+    // the whole set (the log channel is created last).
+    let all = ["scene", "tf", "state", "score", "events", "stats", "log"]
+        .map(|t| format!("/match/1/{t}"));
     let mut channels = std::collections::BTreeMap::new();
-    while !want.iter().all(|t| channels.contains_key(*t)) {
+    while !want.iter().all(|t| channels.contains_key(*t))
+        || !all.iter().all(|t| channels.contains_key(t))
+    {
         let msg = ws.next().await.expect("open").expect("a message");
         if let Message::Text(t) = msg {
             let v: Value = serde_json::from_str(&t).unwrap();
@@ -348,6 +355,10 @@ async fn server_live_streams_a_running_match_and_changes_nothing() {
     }
     // The viewer came in after the start, but saw most of the 60 ticks, in order.
     assert!(scenes >= 30, "{scenes} scenes");
+    assert!(
+        !ticks.is_empty(),
+        "{scenes} scenes but no state; channels {ch:?}"
+    );
     let first = ticks[0];
     assert_eq!(ticks, (first..=60).collect::<Vec<_>>());
     drop(ws);
