@@ -243,10 +243,12 @@ impl MatchStream {
         self.board_y = m.field().half_width + 0.9;
     }
 
-    /// Publishes one tick: `state` after it, the events it produced, and
-    /// (when known) the statistics so far.
-    pub fn tick(&mut self, state: &StateRecord, events: &[Event], stats: Option<&MatchStats>) {
-        let now = wall_ns();
+    /// Only the events of a tick (`server --live` between two sent ticks).
+    pub fn events_only(&mut self, events: &[Event]) {
+        self.publish_events(events, wall_ns());
+    }
+
+    fn publish_events(&mut self, events: &[Event], now: u64) {
         let meta = PartialMetadata::with_log_time(now);
         for e in events {
             if self.events.has_sinks() {
@@ -265,6 +267,14 @@ impl MatchStream {
                 }
             }
         }
+    }
+
+    /// Publishes one tick: `state` after it, the events it produced, and
+    /// (when known) the statistics so far.
+    pub fn tick(&mut self, state: &StateRecord, events: &[Event], stats: Option<&MatchStats>) {
+        let now = wall_ns();
+        let meta = PartialMetadata::with_log_time(now);
+        self.publish_events(events, now);
         let secs = state.time.max(0.0) as u64;
         let clock = format!("{:02}:{:02}", secs / 60, secs % 60);
         let text = format!(
@@ -374,9 +384,17 @@ impl Pace {
     }
 }
 
+/// `server --live` sends a match's scene, transforms, state and score at
+/// most this often (wall clock): a lockstep match can play thousands of
+/// ticks a second, more than a viewer can draw. Events, their log lines and
+/// the statistics are never skipped.
+pub const SERVER_MAX_HZ: f64 = 30.0;
+
 /// `server --live`: each server match's stream, fed by the match task.
 pub struct LiveObserver {
     stream: MatchStream,
+    last_sent: Option<Instant>,
+    last_stats_tick: u64,
 }
 
 impl LiveObserver {
@@ -384,6 +402,8 @@ impl LiveObserver {
     pub fn new(server: &LiveServer, id: u64) -> anyhow::Result<LiveObserver> {
         Ok(LiveObserver {
             stream: server.stream(id)?,
+            last_sent: None,
+            last_stats_tick: 0,
         })
     }
 }
@@ -398,11 +418,26 @@ impl naosoccer_server::MatchObserver for LiveObserver {
     }
 
     fn on_tick(&mut self, r: &naosoccer_server::TickRecord<'_>) {
-        if self.stream.watched() {
-            let m = r.game;
-            let stats = m.tick().is_multiple_of(PITCH_EVERY).then(|| m.stats());
+        if !self.stream.watched() {
+            return;
+        }
+        let m = r.game;
+        let now = Instant::now();
+        let due = self
+            .last_sent
+            .is_none_or(|t| now.duration_since(t).as_secs_f64() >= 1.0 / SERVER_MAX_HZ);
+        if due || m.is_finished() {
+            self.last_sent = Some(now);
+            // Statistics at least 10 ticks apart, and at the end.
+            let stats = (m.tick() >= self.last_stats_tick + PITCH_EVERY || m.is_finished())
+                .then(|| m.stats());
+            if stats.is_some() {
+                self.last_stats_tick = m.tick();
+            }
             self.stream
                 .tick(&StateRecord::of(m), r.events, stats.as_ref());
+        } else {
+            self.stream.events_only(r.events);
         }
     }
 

@@ -353,14 +353,16 @@ async fn server_live_streams_a_running_match_and_changes_nothing() {
             }
         }
     }
-    // The viewer came in after the start, but saw most of the 60 ticks, in order.
+    // The viewer came in after the start, but saw most of the 60 ticks, in
+    // order, up to the last (the server sends at most 30 ticks per second,
+    // so a burst of late real-time ticks may be thinned).
     assert!(scenes >= 30, "{scenes} scenes");
     assert!(
-        !ticks.is_empty(),
-        "{scenes} scenes but no state; channels {ch:?}"
+        ticks.len() >= 30,
+        "{scenes} scenes, states of ticks {ticks:?}; channels {ch:?}"
     );
-    let first = ticks[0];
-    assert_eq!(ticks, (first..=60).collect::<Vec<_>>());
+    assert!(ticks.windows(2).all(|w| w[0] < w[1]), "{ticks:?}");
+    assert_eq!(ticks.last(), Some(&60));
     drop(ws);
     let out = child.wait_with_output().unwrap();
     assert!(out.status.success());
