@@ -212,13 +212,21 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
             .await
             .with_context(|| format!("cannot listen on {addr}"))?;
         let local = listener.local_addr()?;
-        println!(
-            "naosoccer server on {local} ({} mode, {} match(es))",
-            cfg.mode, cfg.matches
-        );
-        println!("blue token:  {}", tokens.blue);
-        println!("red token:   {}", tokens.red);
-        println!("admin token: {}", tokens.admin);
+        {
+            // Written with errors ignored: a reader that stops after the
+            // address line (`| head -1`, a test) must not kill the server.
+            use std::io::Write;
+            let mut out = std::io::stdout().lock();
+            let _ = writeln!(
+                out,
+                "naosoccer server on {local} ({} mode, {} match(es))",
+                cfg.mode, cfg.matches
+            );
+            let _ = writeln!(out, "blue token:  {}", tokens.blue);
+            let _ = writeln!(out, "red token:   {}", tokens.red);
+            let _ = writeln!(out, "admin token: {}", tokens.admin);
+            let _ = out.flush();
+        }
         let (all_done_tx, all_done) = tokio::sync::watch::channel(false);
         let mut hooks = Hooks::default();
         if let Some(team) = learned_fill {
