@@ -114,14 +114,20 @@ impl LiveServer {
     /// After the last tick: waits while viewers are still connected (at most
     /// `linger`), so that they receive what is queued for them, then stops.
     pub fn finish(mut self, linger: Duration) {
+        self.linger(linger);
+        if let Some(h) = self.handle.take() {
+            drop(h.stop());
+        }
+    }
+
+    /// Waits while viewers are still connected, at most `linger`, so that
+    /// they receive what is queued for them (the server's last ticks).
+    pub fn linger(&self, linger: Duration) {
         let end = Instant::now() + linger;
         if let Some(h) = &self.handle {
             while h.client_count() > 0 && Instant::now() < end {
                 std::thread::sleep(Duration::from_millis(20));
             }
-        }
-        if let Some(h) = self.handle.take() {
-            drop(h.stop());
         }
     }
 }

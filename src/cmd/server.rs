@@ -239,6 +239,7 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
         if args.exit_when_done {
             hooks.observer = Some(Arc::new(done_counter(cfg.matches, all_done_tx)));
         }
+        let live_after = live.clone();
         if let Some(live) = live {
             hooks.observer = Some(Arc::new(with_live(hooks.observer.take(), live)));
         }
@@ -250,6 +251,11 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
             }
         };
         naosoccer_server::run_with(listener, cfg, hooks, shutdown).await?;
+        if let Some(live) = live_after {
+            // Viewers still connected get the last ticks queued for them
+            // before the process exits (`--exit-when-done`).
+            tokio::task::spawn_blocking(move || live.linger(naosoccer::live::LINGER)).await?;
+        }
         Ok(())
     })
 }
