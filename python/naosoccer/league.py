@@ -156,10 +156,11 @@ def markdown(doc: Dict[str, Any]) -> str:
         "|---|---:|---:|",
     ]
     for p in doc["pairings"]:
-        b = p["blue"]
-        gf = sum(s[0] for s in p["scores"])
-        ga = sum(s[1] for s in p["scores"])
-        lines.append(f"| `{b['name']}` v `{p['red']['name']}` | {b['wins']}/{b['draws']}/{b['losses']} | {gf}:{ga} |")
+        sc = p["scores"]
+        w = sum(1 for a, b in sc if a > b)
+        d = sum(1 for a, b in sc if a == b)
+        gf, ga = sum(a for a, _ in sc), sum(b for _, b in sc)
+        lines.append(f"| `{p['blue']['name']}` v `{p['red']['name']}` | {w}/{d}/{len(sc) - w - d} | {gf}:{ga} |")
     lines += [
         "",
         "Ratings: Bradley–Terry on the Elo scale (mean 0), a draw half a win, one virtual draw "
