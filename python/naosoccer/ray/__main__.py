@@ -98,6 +98,18 @@ def main(argv: Optional[List[str]] = None) -> int:
     if args.matches < 1:
         print("error: --matches must be at least 1", file=sys.stderr)
         return 2
+    import ray
+
+    try:
+        return _run(args)
+    except ray.exceptions.RayTaskError as e:
+        # A match failed on its node (a bad team spec, no binary there, ...):
+        # its own error, not Ray's traceback around it.
+        print(f"error: {getattr(e, 'cause', None) or e}", file=sys.stderr)
+        return 1
+
+
+def _run(args: argparse.Namespace) -> int:
     from . import connect, run_eval, run_league
 
     connect(args.address, args.num_cpus, args.binary, log_to_driver=False)

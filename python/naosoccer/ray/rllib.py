@@ -24,27 +24,38 @@ from ..env import NaoSoccerParallelEnv
 ENV_NAME = "naosoccer"
 #: The one policy (RLModule) every robot of the team maps to.
 POLICY = "team"
-#: Seeds of env runner k's matches start at seed + k * SEED_STRIDE.
+#: Env runner k plays match seeds (seed + k) * SEED_STRIDE onward.
 SEED_STRIDE = 1_000_000
 
 
-def make_env(config: Dict[str, Any]) -> ParallelPettingZooEnv:
+class NaoSoccerRllibEnv(ParallelPettingZooEnv):
+    """RLlib's wrapper of a PettingZoo ``ParallelEnv``, with RLlib's seeds
+    spread apart: RLlib resets env runner ``k`` first with ``seed + k``, and
+    the env then plays the next seeds, so neighbouring runners would replay
+    each other's matches; here seed ``s`` becomes match seed ``s *
+    SEED_STRIDE``."""
+
+    def reset(self, *, seed: Optional[int] = None, options: Optional[dict] = None):
+        return super().reset(seed=None if seed is None else seed * SEED_STRIDE, options=options)
+
+
+def make_env(config: Dict[str, Any]) -> NaoSoccerRllibEnv:
     """One team of a match as an RLlib ``MultiAgentEnv``, with a private
     server. ``config`` (RLlib's ``env_config``, an ``EnvContext``): ``team``,
     ``opponent``, ``minutes``, ``seed`` and ``binary``, as
     :class:`~naosoccer.NaoSoccerParallelEnv` takes them. Env runner ``k``
-    plays seeds ``seed + k * SEED_STRIDE`` onward, so runners never replay
-    each other's matches."""
-    index = getattr(config, "worker_index", 0) * 1000 + getattr(config, "vector_index", 0)
+    plays match seeds ``(seed + k) * SEED_STRIDE`` onward, as it does when
+    RLlib seeds it (``config.debugging(seed=seed)``)."""
     seed: Optional[int] = config.get("seed")
+    worker = getattr(config, "worker_index", 0)
     env = NaoSoccerParallelEnv(
         team=config.get("team", "blue"),
         opponent=config.get("opponent", "scripted"),
         minutes=config.get("minutes"),
-        seed=None if seed is None else seed + index * SEED_STRIDE,
+        seed=None if seed is None else (seed + worker) * SEED_STRIDE,
         binary=config.get("binary"),
     )
-    return ParallelPettingZooEnv(env)
+    return NaoSoccerRllibEnv(env)
 
 
 def ppo_config(
