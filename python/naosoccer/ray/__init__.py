@@ -21,6 +21,7 @@ the same path), else relative to the task's working directory (a Ray
 
 from __future__ import annotations
 
+import json
 import os
 import time
 from typing import Any, Callable, Dict, List, Optional, Sequence
@@ -66,12 +67,37 @@ def connect(
 def task_runtime_env(binary: Optional[str] = None) -> Dict[str, Any]:
     """The runtime environment the tasks need: this package as a
     ``py_modules`` entry (uploaded to the nodes), and ``NAOSOCCER_BIN`` when
-    the driver names a binary (``binary`` or its own ``$NAOSOCCER_BIN``)."""
+    the driver names a binary (``binary`` or its own ``$NAOSOCCER_BIN``).
+
+    Inside a Ray job (``ray job submit``) Ray merges this with the job's own
+    runtime environment and refuses fields or variables set in both, so what
+    the job already sets is left out: the job's ``NAOSOCCER_BIN`` is the one
+    the driver sees anyway."""
     env: Dict[str, Any] = {"py_modules": [_PACKAGE_DIR]}
     binary = binary or os.environ.get(BIN_ENV)
     if binary:
         env["env_vars"] = {BIN_ENV: binary}
+    job = _job_runtime_env()
+    for key in list(env):
+        if key == "env_vars":
+            env[key] = {k: v for k, v in env[key].items() if k not in (job.get("env_vars") or {})}
+            if not env[key]:
+                del env[key]
+        elif key in job:
+            del env[key]
     return env
+
+
+def _job_runtime_env() -> Dict[str, Any]:
+    """The runtime environment of the Ray job this driver runs in (set by
+    Ray's job manager in the driver's environment), or {}."""
+    text = os.environ.get("RAY_JOB_CONFIG_JSON_ENV_VAR")
+    if not text:
+        return {}
+    try:
+        return dict(json.loads(text).get("runtime_env") or {})
+    except (ValueError, AttributeError):
+        return {}
 
 
 @ray.remote(num_cpus=1)
@@ -86,6 +112,8 @@ def _play_all(
     progress: Optional[Callable[[int, int], None]],
 ) -> List[List[MatchOutcome]]:
     """Every match of every spec as one task each, spread over the nodes."""
+    for spec in specs:
+        spec.check()
     options: Dict[str, Any] = {"scheduling_strategy": "SPREAD"}
     if binary:
         options["runtime_env"] = {"env_vars": {BIN_ENV: binary}}
@@ -94,7 +122,6 @@ def _play_all(
     refs = []
     owner = {}
     for k, spec in enumerate(specs):
-        spec.check()
         for i in range(spec.matches):
             ref = task.remote(spec, i, cwd)
             refs.append(ref)
