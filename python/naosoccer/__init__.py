@@ -4,7 +4,7 @@
 * :class:`NaoSoccerParallelEnv`: one team as a PettingZoo ``ParallelEnv``.
 * :class:`LocalServer`: ``naosoccer server`` as a subprocess on a free port.
 * :mod:`naosoccer.evaluation`, :mod:`naosoccer.league`: ``naosoccer eval``
-  split into single matches and merged again; round-robin standings.
+  played in blocks of matches and merged by the binary; round-robin standings.
 * :mod:`naosoccer.ray` (the ``ray`` extra): evaluations, leagues and RLlib
   training on a Ray cluster (docs/RAY.md).
 

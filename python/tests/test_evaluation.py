@@ -1,26 +1,24 @@
-"""Evaluations played one match at a time and merged (naosoccer.evaluation)
-equal `naosoccer eval --json`, text for text; league standings and ratings
-(naosoccer.league). No Ray needed."""
+"""Evaluations played in blocks and merged by the binary
+(naosoccer.evaluation) equal `naosoccer eval`, text for text; league
+standings and ratings (naosoccer.league). No Ray needed."""
 
 import json
 import math
 import os
+import re
 import subprocess
 
 import numpy as np
 import pytest
 
 from naosoccer.evaluation import (
+    MAX_BLOCK,
     EvalSpec,
-    _float_text,
-    dumps,
-    eval_document,
-    eval_match_seed,
-    format_table,
-    legacy_match_seed,
-    play_match,
-    shifted_seed,
-    wilson,
+    blocks,
+    default_block,
+    evaluate,
+    merge_blocks,
+    play_block,
 )
 from naosoccer.league import ELO_PER_NAT, bradley_terry, league_document, markdown, standings
 
@@ -45,22 +43,24 @@ def binary_eval(binary, spec, *, json_out=True):
     return out.stdout
 
 
-def with_wall(text, wall):
-    doc = json.loads(text)
-    doc["wall_seconds"] = wall
-    return doc
+def without_wall(text):
+    """The text but for the wall-clock time: the JSON's wall_seconds, or the
+    table's last line."""
+    if text.startswith("{"):
+        return re.sub(r'"wall_seconds":[^,}]+', '"wall_seconds":0', text)
+    return text.splitlines()[:-1]
 
 
-def test_shifted_seed_makes_match_i_the_first_match():
-    # The values naosoccer eval derives (crates/policy/src/eval.rs), first
-    # from the formula, then through the shift the tasks rely on.
-    for seed in (0, 1, 7, 2**63, 2**64 - 1):
-        for i in (0, 1, 2, 15, 999):
-            assert eval_match_seed(seed, i) >> 63 == 1
-            assert eval_match_seed(shifted_seed(seed, i), 0) == eval_match_seed(seed, i)
-            assert legacy_match_seed(shifted_seed(seed, i, legacy=True), 0) == legacy_match_seed(seed, i)
-            assert 0 <= shifted_seed(seed, i) < 2**64
-    assert len({eval_match_seed(3, i) for i in range(200)}) == 200
+def test_blocks_cut_the_matches_in_order():
+    assert blocks(6, 4) == [(0, 4), (4, 2)]
+    assert blocks(5, 1) == [(i, 1) for i in range(5)]
+    assert blocks(3, 10) == [(0, 3)]
+    with pytest.raises(ValueError):
+        blocks(3, 0)
+    # About two blocks a CPU, at most MAX_BLOCK matches.
+    assert default_block(16, 2) == 4
+    assert default_block(1, 8) == 1
+    assert default_block(10_000, 2) == MAX_BLOCK
 
 
 @pytest.mark.parametrize(
@@ -72,38 +72,34 @@ def test_shifted_seed_makes_match_i_the_first_match():
     ],
     ids=["both-sides", "ppo-legacy-seeds"],
 )
-def test_matches_played_alone_merge_into_the_binarys_json(binary, spec):
-    want = binary_eval(binary, spec).strip()
-    outcomes = [play_match(spec, i, binary=binary, cwd=REPO) for i in range(spec.matches)]
-    got = eval_document(spec, list(reversed(outcomes)), json.loads(want)["wall_seconds"])
+def test_blocks_merge_into_the_binarys_output(binary, spec):
+    want = binary_eval(binary, spec)
+    # Blocks of 2, handed to the merge out of order.
+    played = [play_block(spec, f, n, binary=binary, cwd=REPO) for f, n in blocks(spec.matches, 2)]
+    got = merge_blocks(list(reversed(played)), binary=binary)
     # The same text: same keys, same floats to the last bit, NaN as null.
-    assert dumps(got) == want
-    table = binary_eval(binary, spec, json_out=False)
-    # The table but for the wall-clock time on its last line.
-    assert format_table(got).splitlines()[:-1] == table.splitlines()[:-1]
+    assert without_wall(got) == without_wall(want)
+    # wall_seconds is the sum of the blocks'.
+    walls = [json.loads(b.text)["wall_seconds"] for b in played]
+    assert json.loads(got)["wall_seconds"] == pytest.approx(sum(walls))
+    table = merge_blocks(played, binary=binary, json_out=False)
+    assert without_wall(table) == without_wall(binary_eval(binary, spec, json_out=False))
+    assert evaluate(spec, block=2, binary=binary, cwd=REPO)["results"] == json.loads(want)["results"]
 
 
 def test_one_match_has_no_interval(binary):
     spec = EvalSpec("idle", "random", matches=1, seed=4, minutes=0.2)
-    want = binary_eval(binary, spec).strip()
-    got = eval_document(spec, [play_match(spec, 0, binary=binary, cwd=REPO)], json.loads(want)["wall_seconds"])
+    want = binary_eval(binary, spec)
+    got = merge_blocks([play_block(spec, 0, 1, binary=binary, cwd=REPO)], binary=binary)
     assert '"ci95":null' in want
-    assert dumps(got) == want
+    assert without_wall(got) == without_wall(want)
 
 
-def test_float_text_follows_serde_json():
-    for x, text in [(1e16, "1e16"), (1.5e-7, "1.5e-7"), (1e-5, "0.00001"), (1.25e-5, "0.0000125"),
-                    (123.0, "123.0"), (0.1, "0.1"), (-2.5e20, "-2.5e20"), (1e15, "1000000000000000.0")]:
-        assert _float_text(x) == text
-        assert float(text) == x
-    assert _float_text(math.nan) == "null"
-
-
-def test_wilson_matches_hand_computed_values():
-    # The binary's own test values (crates/policy/src/eval.rs).
-    for k, n, low, high in [(0, 10, 0.0, 0.277540), (5, 10, 0.236590, 0.763410), (80, 100, 0.711169, 0.866634)]:
-        _, lo, hi = wilson(k, n)
-        assert abs(lo - low) < 1e-5 and abs(hi - high) < 1e-5
+def test_merge_refuses_a_gap(binary):
+    spec = EvalSpec("idle", "random", matches=4, seed=4, minutes=0.2)
+    played = [play_block(spec, f, 1, binary=binary, cwd=REPO) for f in (0, 2)]
+    with pytest.raises(RuntimeError, match="match 1 is missing"):
+        merge_blocks(played, binary=binary)
 
 
 def test_bradley_terry_two_teams_is_the_log_odds():

@@ -7,10 +7,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use naosoccer_policy::eval::{
-    format_table, play_matches, summarise, Estimate, EvalPlan, Rate, Record, SeedScheme, Side,
-    TeamSummary,
-};
+use naosoccer_policy::eval::{play_matches, EvalPlan, EvalReport, SeedScheme, Side};
 use naosoccer_referee::MatchConfig;
 
 /// The match configuration: a TOML file or the defaults (assets/match.toml),
@@ -32,6 +29,9 @@ pub fn match_config(path: Option<&PathBuf>, minutes: Option<f32>) -> anyhow::Res
   naosoccer eval --blue ppo:runs/ppo-1 --red scripted --matches 100 --both-sides --seed 1
   naosoccer eval --blue ppo:assets/policies/ppo-paper-seed1 --red dqn:assets/policies/dqn-seed1
   naosoccer eval --blue ppo:runs/ppo-1 --red scripted:assets/scripted/press.toml --both-sides
+  naosoccer eval --blue scripted --red random --matches 4 --first-match 0 --json > a.json
+  naosoccer eval --blue scripted --red random --matches 4 --first-match 4 --json > b.json
+  naosoccer eval --merge a.json b.json        # = --matches 8, as one run
 
 Match i has a seed derived from --seed and i, so two evaluations with the
 same --seed play the same matches. Evaluation seeds have their own
@@ -45,6 +45,18 @@ name, with its record as blue and as red. Prints average goals, ball-control
 rate, passes, shots (mean ± 95% CI over matches), wins/draws/losses and the
 win rate with its Wilson 95% interval per team.
 
+Blocks: --first-match I --matches N plays matches I to I+N-1 of the
+evaluation (the same seeds and sides as in one run of I+N matches), and
+reports them alone. --json lists every match in \"results\": its global
+index, seed, whether it was swapped, both teams' goals, ball control,
+passes and shots (the --blue team first) and its final state hash, with
+\"first_match\" and \"config_hash\" (a hash of the match configuration).
+--merge FILE.json... reads such --json outputs of one evaluation (same
+teams, seed, seed scheme, --both-sides, match length and configuration) and
+prints exactly what one run over all their matches prints, the table or
+with --json the object; its wall_seconds is the sum of the files'. It
+refuses files of different evaluations, a match in two files, and gaps.
+
 A PPO team (ppo:DIR) samples its actions from its policy, drawing from a hash
 of the match seed, robot and tick; ppo-greedy:DIR takes the most likely action;
 dqn:DIR takes the largest Q-value; dqn-epsilon:DIR acts epsilon-greedily with
@@ -53,14 +65,19 @@ pub struct EvalArgs {
     /// First team (blue, unless --both-sides swaps it): scripted,
     /// scripted:KEY=VAL,..., scripted:FILE.toml, random, idle, ppo:DIR,
     /// ppo-greedy:DIR, dqn:DIR or dqn-epsilon:DIR.
-    #[arg(long)]
-    blue: String,
+    #[arg(long, required_unless_present = "merge")]
+    blue: Option<String>,
     /// Second team: as --blue.
     #[arg(long, default_value = "scripted")]
     red: String,
     /// Matches to play.
     #[arg(long, default_value_t = 50)]
     matches: usize,
+    /// The global index of the first match played: plays matches
+    /// FIRST_MATCH .. FIRST_MATCH+MATCHES-1 of the evaluation, seeded and
+    /// swapped as in one run of all of them.
+    #[arg(long, default_value_t = 0)]
+    first_match: usize,
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Play every other match with the sides swapped.
@@ -83,15 +100,49 @@ pub struct EvalArgs {
     /// One JSON object instead of the table.
     #[arg(long)]
     json: bool,
+    /// Play nothing: merge these --json outputs of blocks of one evaluation
+    /// and print what one run over all their matches prints.
+    #[arg(
+        long,
+        num_args = 1..,
+        value_name = "FILE.json",
+        conflicts_with_all = [
+            "blue", "red", "matches", "first_match", "seed", "both_sides",
+            "legacy_seeds", "config", "minutes", "threads",
+        ]
+    )]
+    merge: Vec<PathBuf>,
 }
 
 pub fn eval_cmd(a: EvalArgs) -> anyhow::Result<()> {
+    let report = if a.merge.is_empty() {
+        play(&a)?
+    } else {
+        merge(&a.merge)?
+    };
+    if a.json {
+        println!("{}", report.to_json());
+    } else {
+        print!("{}", report.table());
+    }
+    Ok(())
+}
+
+fn play(a: &EvalArgs) -> anyhow::Result<EvalReport> {
     anyhow::ensure!(a.matches > 0, "--matches must be at least 1");
+    anyhow::ensure!(
+        a.first_match.checked_add(a.matches).is_some(),
+        "--first-match {} plus --matches {} is out of range",
+        a.first_match,
+        a.matches
+    );
+    let blue_spec = a.blue.clone().context("--blue is required")?;
     let cfg = match_config(a.config.as_ref(), a.minutes)?;
-    let mut blue = Side::parse(&a.blue)?;
+    let mut blue = Side::parse(&blue_spec)?;
     let mut red = Side::parse(&a.red)?;
     let plan = EvalPlan {
         matches: a.matches,
+        first_match: a.first_match,
         seed: a.seed,
         both_sides: a.both_sides,
         seeds: if a.legacy_seeds {
@@ -103,38 +154,25 @@ pub fn eval_cmd(a: EvalArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let results = play_matches(&cfg, &mut blue, &mut red, &plan, a.threads)?;
     let secs = start.elapsed().as_secs_f64();
-    let rows = summarise(&results, &a.blue, &a.red);
-    if a.json {
-        let est = |e: &Estimate| serde_json::json!({"mean": e.mean, "ci95": e.ci95});
-        let rate = |r: &Rate| serde_json::json!({"rate": r.rate, "low": r.low, "high": r.high});
-        let rec =
-            |r: &Record| serde_json::json!({"wins": r.wins, "draws": r.draws, "losses": r.losses});
-        let team = |r: &TeamSummary| {
-            serde_json::json!({
-                "name": r.name, "goals": est(&r.goals), "control_rate_percent": est(&r.control_rate),
-                "passes": est(&r.passes), "shots": est(&r.shots),
-                "wins": r.wins, "draws": r.draws, "losses": r.losses,
-                "win_rate": rate(&r.win_rate), "as_blue": rec(&r.as_blue), "as_red": rec(&r.as_red),
-            })
-        };
-        // Per match, the --blue team's goals first, whichever colour it played.
-        let scores: Vec<_> = results
-            .iter()
-            .map(|r| [r.goals_of(true), r.goals_of(false)])
-            .collect();
-        let swapped: Vec<_> = results.iter().map(|r| r.swapped).collect();
-        println!(
-            "{}",
-            serde_json::json!({
-                "matches": a.matches, "seed": a.seed, "minutes": cfg.minutes,
-                "both_sides": a.both_sides, "seed_scheme": plan.seeds.name(),
-                "blue": team(&rows[0]), "red": team(&rows[1]), "scores": scores,
-                "swapped": swapped, "wall_seconds": secs,
-            })
-        );
-    } else {
-        print!("{}", format_table(&rows, a.matches));
-        println!("({:.1} min matches, {:.1} s)", cfg.minutes, secs);
+    Ok(EvalReport::new(
+        [blue_spec, a.red.clone()],
+        plan,
+        &cfg,
+        &results,
+        secs,
+    ))
+}
+
+/// The reports in `files`, merged into one run's.
+fn merge(files: &[PathBuf]) -> anyhow::Result<EvalReport> {
+    let mut parts = Vec::with_capacity(files.len());
+    for f in files {
+        let text =
+            std::fs::read_to_string(f).with_context(|| format!("reading {}", f.display()))?;
+        let label = f.display().to_string();
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .with_context(|| format!("{label}: not JSON (an `eval --json` output?)"))?;
+        parts.push((label.clone(), EvalReport::from_json(&label, &value)?));
     }
-    Ok(())
+    Ok(EvalReport::merge(&parts)?)
 }

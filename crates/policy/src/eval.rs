@@ -11,10 +11,18 @@
 //!
 //! Matches run side by side; a trained team decides for all its robots in all
 //! matches in one forward pass per tick.
+//!
+//! An evaluation can be played in blocks (`--first-match`): match `i` has
+//! the same seed and sides in a block as in the whole run, by its global
+//! index. An [`EvalReport`] keeps every match's [`MatchRecord`], so reports
+//! of blocks merge ([`EvalReport::merge`]) into the report of the whole run,
+//! statistics and all, computed here and nowhere else.
 
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::{Action, MatchStats, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
 
 use crate::learned::LearnedPolicy;
 use crate::PolicyError;
@@ -107,26 +115,42 @@ pub fn legacy_episode_seed(seed: u64, index: usize, episode: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// How an evaluation is played.
+/// How an evaluation is played: matches `first_match .. first_match +
+/// matches` of the evaluation that `seed`, `both_sides` and `seeds` define.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct EvalPlan {
     pub matches: usize,
+    /// The global index of the first match played (0 for a whole run).
+    pub first_match: usize,
     pub seed: u64,
-    /// Odd-numbered matches swap the sides: the first team plays red.
+    /// Odd-numbered matches (by global index) swap the sides: the first
+    /// team plays red.
     pub both_sides: bool,
     pub seeds: SeedScheme,
 }
 
 impl EvalPlan {
-    /// Whether match `i` has the first team playing red.
+    /// Whether match `i` (a global index) has the first team playing red.
     pub fn swapped(&self, i: usize) -> bool {
         self.both_sides && i % 2 == 1
+    }
+
+    /// The seed of match `i` (a global index).
+    pub fn match_seed(&self, i: usize) -> u64 {
+        self.seeds.match_seed(self.seed, i)
+    }
+
+    /// The global indices of the matches played.
+    pub fn indices(&self) -> std::ops::Range<usize> {
+        self.first_match..self.first_match + self.matches
     }
 }
 
 /// One finished match.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MatchResult {
+    /// Its global index in the evaluation.
+    pub index: usize,
     pub seed: u64,
     /// By colour: (blue, red).
     pub score: (u32, u32),
@@ -153,6 +177,42 @@ impl MatchResult {
             Team::Red => self.score.1,
         }
     }
+
+    /// What the summary needs of this match.
+    pub fn record(&self) -> MatchRecord {
+        let pair = |f: &dyn Fn(bool) -> u32| [f(true), f(false)];
+        let team = |first: bool| self.stats.team(self.team_of(first));
+        MatchRecord {
+            index: self.index,
+            seed: self.seed,
+            swapped: self.swapped,
+            goals: pair(&|first| self.goals_of(first)),
+            control_rate_percent: [true, false].map(|first| 100.0 * team(first).control_rate),
+            passes: pair(&|first| team(first).passes),
+            shots: pair(&|first| team(first).shots),
+            state_hash: self.state_hash,
+        }
+    }
+}
+
+/// One match of an evaluation as its report keeps it (`results` in
+/// `eval --json`): every pair is (first team, second team), the first being
+/// `--blue` whichever colour it played.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MatchRecord {
+    /// The global index of the match in the evaluation.
+    pub index: usize,
+    pub seed: u64,
+    /// The first team played red.
+    pub swapped: bool,
+    pub goals: [u32; 2],
+    /// Each team's share of the ticks in which a team controlled the ball.
+    pub control_rate_percent: [f64; 2],
+    pub passes: [u32; 2],
+    pub shots: [u32; 2],
+    /// The match's final state hash (the same on every machine of one build).
+    pub state_hash: u64,
 }
 
 struct Slot {
@@ -161,11 +221,12 @@ struct Slot {
     policies: Vec<Option<Box<dyn Policy>>>,
     decided: [Action; ROBOTS],
     swapped: bool,
+    index: usize,
 }
 
-/// Plays the matches of `plan` between `first` and `second`: match `i` has
-/// seed `plan.seeds.match_seed(plan.seed, i)`, and `first` plays blue unless
-/// `plan.swapped(i)`.
+/// Plays the matches of `plan` between `first` and `second`, in index
+/// order: match `i` (a global index) has seed `plan.match_seed(i)`, and
+/// `first` plays blue unless `plan.swapped(i)`.
 pub fn play_matches(
     cfg: &MatchConfig,
     first: &mut Side,
@@ -174,8 +235,8 @@ pub fn play_matches(
     threads: usize,
 ) -> Result<Vec<MatchResult>, PolicyError> {
     let mut slots = Vec::with_capacity(plan.matches);
-    for i in 0..plan.matches {
-        let m = Match::new(cfg, plan.seeds.match_seed(plan.seed, i))?;
+    for i in plan.indices() {
+        let m = Match::new(cfg, plan.match_seed(i))?;
         let s = m.seed();
         let swapped = plan.swapped(i);
         let policies = RobotId::all()
@@ -198,6 +259,7 @@ pub fn play_matches(
             policies,
             decided: [Action::Stay; ROBOTS],
             swapped,
+            index: i,
             m,
         };
         observe_all(&mut slot);
@@ -252,6 +314,7 @@ pub fn play_matches(
     Ok(slots
         .iter()
         .map(|s| MatchResult {
+            index: s.index,
             seed: s.m.seed(),
             score: s.m.score(),
             stats: s.m.stats(),
@@ -442,20 +505,22 @@ pub struct TeamSummary {
 }
 
 /// Table I over a set of matches, for the first team (`--blue`) and the
-/// second, each under its own name whichever colour it played.
-pub fn summarise(results: &[MatchResult], first_name: &str, second_name: &str) -> [TeamSummary; 2] {
-    [(true, first_name), (false, second_name)].map(|(first, name)| {
-        let col = |f: &dyn Fn(&MatchResult) -> f64| {
-            Estimate::of(&results.iter().map(f).collect::<Vec<_>>())
+/// second, each under its own name whichever colour it played. The float
+/// sums run in the order of `records`.
+pub fn summarise(records: &[MatchRecord], first_name: &str, second_name: &str) -> [TeamSummary; 2] {
+    [(0, first_name), (1, second_name)].map(|(k, name)| {
+        let col = |f: &dyn Fn(&MatchRecord) -> f64| {
+            Estimate::of(&records.iter().map(f).collect::<Vec<_>>())
         };
         let (mut as_blue, mut as_red) = (Record::default(), Record::default());
-        for r in results {
-            let rec = if r.team_of(first) == Team::Blue {
+        for r in records {
+            // The first team (k = 0) plays blue unless the match is swapped.
+            let rec = if (k == 0) != r.swapped {
                 &mut as_blue
             } else {
                 &mut as_red
             };
-            match r.goals_of(first).cmp(&r.goals_of(!first)) {
+            match r.goals[k].cmp(&r.goals[1 - k]) {
                 std::cmp::Ordering::Greater => rec.wins += 1,
                 std::cmp::Ordering::Equal => rec.draws += 1,
                 std::cmp::Ordering::Less => rec.losses += 1,
@@ -464,28 +529,37 @@ pub fn summarise(results: &[MatchResult], first_name: &str, second_name: &str) -
         let wins = as_blue.wins + as_red.wins;
         TeamSummary {
             name: name.to_string(),
-            goals: col(&|r| f64::from(r.goals_of(first))),
-            control_rate: col(&|r| 100.0 * r.stats.team(r.team_of(first)).control_rate),
-            passes: col(&|r| f64::from(r.stats.team(r.team_of(first)).passes)),
-            shots: col(&|r| f64::from(r.stats.team(r.team_of(first)).shots)),
+            goals: col(&|r| f64::from(r.goals[k])),
+            control_rate: col(&|r| r.control_rate_percent[k]),
+            passes: col(&|r| f64::from(r.passes[k])),
+            shots: col(&|r| f64::from(r.shots[k])),
             wins,
             draws: as_blue.draws + as_red.draws,
             losses: as_blue.losses + as_red.losses,
-            win_rate: Rate::wilson(wins, results.len()),
+            win_rate: Rate::wilson(wins, records.len()),
             as_blue,
             as_red,
         }
     })
 }
 
-/// The table as text, one row per team.
-pub fn format_table(rows: &[TeamSummary], matches: usize) -> String {
+/// The table as text, one row per team, for `matches` matches from global
+/// index `first_match` on.
+pub fn format_table(rows: &[TeamSummary], matches: usize, first_match: usize) -> String {
     let both = rows
         .iter()
         .any(|r| r.as_red.matches() > 0 && r.as_blue.matches() > 0);
     let mut s = format!(
-        "{matches} matches{}, mean ± 95% CI; win % with its Wilson 95% interval\n\
+        "{matches} matches{}{}, mean ± 95% CI; win % with its Wilson 95% interval\n\
          {:<28} {:>14} {:>18} {:>16} {:>16} {:>11} {:>20}\n",
+        if first_match > 0 {
+            format!(
+                " (numbers {first_match} to {} of the evaluation)",
+                first_match + matches - 1
+            )
+        } else {
+            String::new()
+        },
         if both {
             ", half with the sides swapped"
         } else {
@@ -526,6 +600,310 @@ pub fn format_table(rows: &[TeamSummary], matches: usize) -> String {
         }
     }
     s
+}
+
+/// A 64-bit FNV-1a hash of the match configuration's JSON form: reports
+/// with the same hash were played under the same configuration.
+pub fn config_hash(cfg: &MatchConfig) -> u64 {
+    // Plain data (numbers, arrays, enums): serialising cannot fail.
+    let text = serde_json::to_vec(cfg).expect("a match configuration serialises");
+    text.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// An evaluation's report: what `naosoccer eval --json` prints, and what
+/// `eval --merge` reads back and merges. The statistics are always computed
+/// from the per-match records, so a merged report is the report of one run
+/// over the same matches.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvalReport {
+    /// The first team's spec (`--blue`), then the second's (`--red`).
+    pub names: [String; 2],
+    pub plan: EvalPlan,
+    /// The match length (the configuration's, after `--minutes`).
+    pub minutes: f32,
+    /// [`config_hash`] of the match configuration.
+    pub config_hash: u64,
+    /// One per match of `plan`, in index order.
+    pub records: Vec<MatchRecord>,
+    /// Wall-clock seconds the matches took to play (for a merged report,
+    /// the sum of its parts').
+    pub wall_seconds: f64,
+}
+
+/// Why a report could not be read or merged.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReportError {
+    /// Not the JSON of an `eval --json` with per-match results, or one
+    /// whose records do not fit its own plan.
+    #[error("{label}: {reason}")]
+    Format { label: String, reason: String },
+    /// Two reports of different evaluations.
+    #[error("{label} is not the evaluation of {first}: {field} is {found} there, {expected} in {first}")]
+    Mismatch {
+        first: String,
+        label: String,
+        field: &'static str,
+        expected: String,
+        found: String,
+    },
+    /// A match is in two reports.
+    #[error("match {index} is in both {first} and {second}")]
+    Overlap {
+        index: usize,
+        first: String,
+        second: String,
+    },
+    /// Matches between two reports are in none.
+    #[error("{} (between {before} and {after})", missing(*.from, *.to))]
+    Gap {
+        from: usize,
+        to: usize,
+        before: String,
+        after: String,
+    },
+    #[error("no reports to merge")]
+    Empty,
+}
+
+fn missing(from: usize, to: usize) -> String {
+    if from == to {
+        format!("match {from} is missing")
+    } else {
+        format!("matches {from} to {to} are missing")
+    }
+}
+
+/// The fields of an `eval --json` object that a report is rebuilt from
+/// (the summaries are recomputed from `results`).
+#[derive(Deserialize)]
+struct ReportFile {
+    matches: usize,
+    first_match: usize,
+    seed: u64,
+    minutes: f32,
+    both_sides: bool,
+    seed_scheme: String,
+    config_hash: String,
+    blue: NamedTeam,
+    red: NamedTeam,
+    results: Vec<MatchRecord>,
+    wall_seconds: f64,
+}
+
+#[derive(Deserialize)]
+struct NamedTeam {
+    name: String,
+}
+
+impl EvalReport {
+    /// The report of `results`, played by `play_matches` under `plan` and `cfg`.
+    pub fn new(
+        names: [String; 2],
+        plan: EvalPlan,
+        cfg: &MatchConfig,
+        results: &[MatchResult],
+        wall_seconds: f64,
+    ) -> EvalReport {
+        EvalReport {
+            names,
+            plan,
+            minutes: cfg.minutes,
+            config_hash: config_hash(cfg),
+            records: results.iter().map(MatchResult::record).collect(),
+            wall_seconds,
+        }
+    }
+
+    /// Each team's row: the first team's, then the second's.
+    pub fn summary(&self) -> [TeamSummary; 2] {
+        summarise(&self.records, &self.names[0], &self.names[1])
+    }
+
+    /// The `eval --json` object.
+    pub fn to_json(&self) -> Value {
+        let rows = self.summary();
+        let est = |e: &Estimate| json!({"mean": e.mean, "ci95": e.ci95});
+        let rate = |r: &Rate| json!({"rate": r.rate, "low": r.low, "high": r.high});
+        let rec = |r: &Record| json!({"wins": r.wins, "draws": r.draws, "losses": r.losses});
+        let team = |r: &TeamSummary| {
+            json!({
+                "name": r.name, "goals": est(&r.goals), "control_rate_percent": est(&r.control_rate),
+                "passes": est(&r.passes), "shots": est(&r.shots),
+                "wins": r.wins, "draws": r.draws, "losses": r.losses,
+                "win_rate": rate(&r.win_rate), "as_blue": rec(&r.as_blue), "as_red": rec(&r.as_red),
+            })
+        };
+        // Per match, the --blue team's goals first, whichever colour it played.
+        let scores: Vec<_> = self.records.iter().map(|r| r.goals).collect();
+        let swapped: Vec<_> = self.records.iter().map(|r| r.swapped).collect();
+        json!({
+            "matches": self.plan.matches, "first_match": self.plan.first_match,
+            "seed": self.plan.seed, "minutes": self.minutes,
+            "both_sides": self.plan.both_sides, "seed_scheme": self.plan.seeds.name(),
+            "config_hash": format!("{:016x}", self.config_hash),
+            "blue": team(&rows[0]), "red": team(&rows[1]), "scores": scores,
+            "swapped": swapped, "results": self.records, "wall_seconds": self.wall_seconds,
+        })
+    }
+
+    /// The table `naosoccer eval` prints.
+    pub fn table(&self) -> String {
+        format!(
+            "{}({:.1} min matches, {:.1} s)\n",
+            format_table(&self.summary(), self.plan.matches, self.plan.first_match),
+            self.minutes,
+            self.wall_seconds
+        )
+    }
+
+    /// Reads back what [`to_json`](Self::to_json) wrote; `label` names the
+    /// source in errors. Refuses objects without per-match `results` (from
+    /// a naosoccer before them) and records that do not fit the plan.
+    pub fn from_json(label: &str, v: &Value) -> Result<EvalReport, ReportError> {
+        let bad = |reason: String| ReportError::Format {
+            label: label.to_string(),
+            reason,
+        };
+        if v.get("results").is_none() {
+            return Err(bad("no per-match \"results\": not the output of `naosoccer eval --json`, \
+                 or of one older than --merge (play it again)"
+                .into()));
+        }
+        let f: ReportFile = serde_json::from_value(v.clone())
+            .map_err(|e| bad(format!("not an `eval --json` object: {e}")))?;
+        let seeds = match f.seed_scheme.as_str() {
+            "eval" => SeedScheme::Eval,
+            "legacy" => SeedScheme::Legacy,
+            other => return Err(bad(format!("unknown seed_scheme {other:?}"))),
+        };
+        let config_hash = u64::from_str_radix(&f.config_hash, 16)
+            .map_err(|_| bad(format!("config_hash {:?} is not hexadecimal", f.config_hash)))?;
+        let plan = EvalPlan {
+            matches: f.matches,
+            first_match: f.first_match,
+            seed: f.seed,
+            both_sides: f.both_sides,
+            seeds,
+        };
+        if f.matches == 0 || f.first_match.checked_add(f.matches).is_none() {
+            return Err(bad(format!(
+                "{} matches from match {}",
+                f.matches, f.first_match
+            )));
+        }
+        if f.results.len() != f.matches {
+            return Err(bad(format!(
+                "{} results for {} matches",
+                f.results.len(),
+                f.matches
+            )));
+        }
+        for (i, r) in plan.indices().zip(&f.results) {
+            if r.index != i || r.seed != plan.match_seed(i) || r.swapped != plan.swapped(i) {
+                return Err(bad(format!(
+                    "results[{}] (match {}, seed {}, swapped {}) is not match {i} of the plan \
+                     (seed {}, swapped {})",
+                    i - plan.first_match,
+                    r.index,
+                    r.seed,
+                    r.swapped,
+                    plan.match_seed(i),
+                    plan.swapped(i)
+                )));
+            }
+        }
+        Ok(EvalReport {
+            names: [f.blue.name, f.red.name],
+            plan,
+            minutes: f.minutes,
+            config_hash,
+            records: f.results,
+            wall_seconds: f.wall_seconds,
+        })
+    }
+
+    /// Merges reports of blocks of one evaluation (each with its label, for
+    /// errors) into the report one run over all their matches gives. They
+    /// must agree on the teams, seed, seed scheme, sides, match length and
+    /// configuration, and their matches must form one run without gaps or
+    /// overlaps. `wall_seconds` is the sum of theirs.
+    pub fn merge(parts: &[(String, EvalReport)]) -> Result<EvalReport, ReportError> {
+        let (first_label, first) = parts.first().ok_or(ReportError::Empty)?;
+        for (label, r) in &parts[1..] {
+            let checks: [(&'static str, String, String); 7] = [
+                ("--blue", first.names[0].clone(), r.names[0].clone()),
+                ("--red", first.names[1].clone(), r.names[1].clone()),
+                ("seed", first.plan.seed.to_string(), r.plan.seed.to_string()),
+                (
+                    "seed_scheme",
+                    first.plan.seeds.name().into(),
+                    r.plan.seeds.name().into(),
+                ),
+                (
+                    "both_sides",
+                    first.plan.both_sides.to_string(),
+                    r.plan.both_sides.to_string(),
+                ),
+                ("minutes", first.minutes.to_string(), r.minutes.to_string()),
+                (
+                    "config_hash",
+                    format!("{:016x}", first.config_hash),
+                    format!("{:016x}", r.config_hash),
+                ),
+            ];
+            for (field, expected, found) in checks {
+                if expected != found {
+                    return Err(ReportError::Mismatch {
+                        first: first_label.clone(),
+                        label: label.clone(),
+                        field,
+                        expected,
+                        found,
+                    });
+                }
+            }
+        }
+        let mut order: Vec<&(String, EvalReport)> = parts.iter().collect();
+        order.sort_by_key(|(_, r)| r.plan.first_match);
+        for pair in order.windows(2) {
+            let ((before, a), (after, b)) = (pair[0], pair[1]);
+            let end = a.plan.indices().end;
+            if b.plan.first_match < end {
+                return Err(ReportError::Overlap {
+                    index: b.plan.first_match,
+                    first: before.clone(),
+                    second: after.clone(),
+                });
+            }
+            if b.plan.first_match > end {
+                return Err(ReportError::Gap {
+                    from: end,
+                    to: b.plan.first_match - 1,
+                    before: before.clone(),
+                    after: after.clone(),
+                });
+            }
+        }
+        let records: Vec<MatchRecord> = order
+            .iter()
+            .flat_map(|(_, r)| r.records.iter().cloned())
+            .collect();
+        Ok(EvalReport {
+            names: first.names.clone(),
+            plan: EvalPlan {
+                matches: records.len(),
+                first_match: order[0].1.plan.first_match,
+                ..first.plan
+            },
+            minutes: first.minutes,
+            config_hash: first.config_hash,
+            records,
+            wall_seconds: order.iter().map(|(_, r)| r.wall_seconds).sum(),
+        })
+    }
 }
 
 #[cfg(test)]
@@ -591,6 +969,7 @@ mod tests {
         let cfg = short_config();
         let plan = EvalPlan {
             matches: 4,
+            first_match: 0,
             seed: 3,
             both_sides: true,
             seeds: SeedScheme::Eval,
@@ -620,7 +999,8 @@ mod tests {
             assert_eq!(both[i].score, expect.score);
             assert_eq!(both[i].state_hash, expect.state_hash);
         }
-        let [first, second] = summarise(&both, "scripted", "random");
+        let records: Vec<_> = both.iter().map(MatchResult::record).collect();
+        let [first, second] = summarise(&records, "scripted", "random");
         assert_eq!(
             (first.name.as_str(), second.name.as_str()),
             ("scripted", "random")
@@ -641,6 +1021,99 @@ mod tests {
         assert!((first.goals.mean - f64::from(goals) / 4.0).abs() < 1e-12);
         assert_eq!(first.wins, second.losses);
         assert_eq!(first.win_rate, Rate::wilson(first.wins, 4));
+    }
+
+    /// A block of an evaluation plays its matches as the whole run does, by
+    /// global index; the reports of blocks merge into the whole run's,
+    /// through their JSON; mismatched and incomplete sets are refused.
+    #[test]
+    fn blocks_play_the_whole_runs_matches_and_merge_into_its_report() {
+        let cfg = short_config();
+        let names = ["scripted".to_string(), "random".to_string()];
+        let whole = EvalPlan {
+            matches: 5,
+            first_match: 0,
+            seed: 9,
+            both_sides: true,
+            seeds: SeedScheme::Eval,
+        };
+        let play = |plan: EvalPlan| {
+            let mut a = Side::Builtin(PolicyKind::Scripted);
+            let mut b = Side::Builtin(PolicyKind::Random);
+            let results = play_matches(&cfg, &mut a, &mut b, &plan, 2).unwrap();
+            // Through the JSON, as --merge reads it.
+            let json = EvalReport::new(names.clone(), plan, &cfg, &results, 1.0).to_json();
+            EvalReport::from_json("part", &json).unwrap()
+        };
+        let full = play(whole);
+        let block = |first_match, matches| {
+            play(EvalPlan {
+                first_match,
+                matches,
+                ..whole
+            })
+        };
+        let (a, b, c) = (block(0, 2), block(2, 2), block(4, 1));
+        assert_eq!(b.records[..], full.records[2..4]);
+        assert_eq!(b.records[1].index, 3);
+        assert!(b.records[1].swapped);
+        let label = |s: &str, r: &EvalReport| (s.to_string(), r.clone());
+        let merged = EvalReport::merge(&[label("c", &c), label("a", &a), label("b", &b)]).unwrap();
+        assert_eq!(merged.wall_seconds, 3.0);
+        assert_eq!(
+            EvalReport {
+                wall_seconds: 1.0,
+                ..merged.clone()
+            },
+            full
+        );
+        assert_eq!(merged.to_json()["blue"], full.to_json()["blue"]);
+        // Blocks 2..5 alone are the run of --first-match 2 --matches 3.
+        let tail = EvalReport::merge(&[label("b", &b), label("c", &c)]).unwrap();
+        assert_eq!(tail.records, block(2, 3).records);
+        assert!(tail.table().starts_with("3 matches (numbers 2 to 4 of the evaluation)"));
+
+        let err = |parts: &[(String, EvalReport)]| EvalReport::merge(parts).unwrap_err();
+        assert!(matches!(
+            err(&[label("a", &a), label("c", &c)]),
+            ReportError::Gap { from: 2, to: 3, .. }
+        ));
+        assert!(matches!(
+            err(&[label("a", &a), label("a2", &block(1, 2)), label("c", &c)]),
+            ReportError::Overlap { index: 1, .. }
+        ));
+        let mut other = b.clone();
+        other.names[1] = "idle".into();
+        assert!(matches!(
+            err(&[label("a", &a), label("b", &other)]),
+            ReportError::Mismatch { field: "--red", .. }
+        ));
+        other = b.clone();
+        other.config_hash ^= 1;
+        assert!(matches!(
+            err(&[label("a", &a), label("b", &other)]),
+            ReportError::Mismatch {
+                field: "config_hash",
+                ..
+            }
+        ));
+        assert!(matches!(err(&[]), ReportError::Empty));
+        // A record that is not its plan's match is refused on reading.
+        let mut json = b.to_json();
+        json["results"][0]["seed"] = json!(1);
+        assert!(matches!(
+            EvalReport::from_json("b", &json),
+            Err(ReportError::Format { .. })
+        ));
+        let mut json = b.to_json();
+        json.as_object_mut().unwrap().remove("results");
+        assert!(EvalReport::from_json("b", &json).is_err());
+        // Another match length is another configuration.
+        let longer = MatchConfig {
+            minutes: 0.5,
+            ..cfg.clone()
+        };
+        assert_ne!(config_hash(&longer), config_hash(&cfg));
     }
 
     #[test]

@@ -1,21 +1,25 @@
-"""naosoccer on a Ray cluster: evaluations and leagues whose matches are Ray
-tasks, and the PettingZoo env for RLlib (:mod:`naosoccer.ray.rllib`).
+"""naosoccer on a Ray cluster: evaluations and leagues whose matches are
+played in blocks by Ray tasks, and the PettingZoo env for RLlib
+(:mod:`naosoccer.ray.rllib`).
 
-Each match is one task that runs ``naosoccer eval --matches 1`` on its node
-(:func:`naosoccer.evaluation.play_match`); matches are deterministic by their
-seed, so the merged result equals the single-machine ``naosoccer eval``
-whatever node played what. Needs the ``ray`` extra (``pip install
-'./python[ray]'``); docs/RAY.md in the repository.
+Each task runs ``naosoccer eval --first-match I --matches N --json`` on its
+node for one block of matches (:func:`naosoccer.evaluation.play_block`); the
+driver merges the blocks with ``naosoccer eval --merge``. Matches are
+deterministic by their seed, so the result equals the single-machine
+``naosoccer eval`` whatever node played what, and the statistics are the
+binary's own. Needs the ``ray`` extra (``pip install './python[ray]'``);
+docs/RAY.md in the repository.
 
 Where things come from on a node: this package is shipped to every task
 (a Ray ``runtime_env`` ``py_modules`` entry), so the nodes need Ray but not
 naosoccer installed. The binary is ``binary=`` if given, else
 ``$NAOSOCCER_BIN`` as set where the driver runs (passed to the tasks), else
 the node's own ``$NAOSOCCER_BIN``, then the repository's ``target/release``
-(:func:`naosoccer.find_binary`). Relative paths (team directories, ``--config``,
-a relative binary) are taken relative to the driver's working directory when
-that directory exists on the node (a shared path, or the same checkout at
-the same path), else relative to the task's working directory (a Ray
+(:func:`naosoccer.find_binary`); the driver finds its own the same way for
+the merge. Relative paths (team directories, ``--config``, a relative
+binary) are taken relative to the driver's working directory when that
+directory exists on the node (a shared path, or the same checkout at the
+same path), else relative to the task's working directory (a Ray
 ``runtime_env`` ``working_dir``).
 """
 
@@ -33,11 +37,19 @@ except ImportError as e:  # pragma: no cover - depends on the installation
         "naosoccer.ray needs Ray: pip install './python[ray]' (scripts/setup installs it)"
     ) from e
 
-from ..evaluation import EvalSpec, MatchOutcome, eval_document, play_match
+from ..evaluation import Block, EvalSpec, blocks, default_block, merge_blocks, play_block
 from ..league import league_document, pairings
 from ..server import BIN_ENV
 
-__all__ = ["connect", "run_eval", "run_eval_outcomes", "run_league", "task_runtime_env"]
+__all__ = [
+    "connect",
+    "default_block_for",
+    "run_eval",
+    "run_eval_blocks",
+    "run_eval_text",
+    "run_league",
+    "task_runtime_env",
+]
 
 _PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -101,66 +113,95 @@ def _job_runtime_env() -> Dict[str, Any]:
 
 
 @ray.remote(num_cpus=1)
-def _play(spec: EvalSpec, index: int, cwd: str) -> MatchOutcome:
+def _play(spec: EvalSpec, first: int, matches: int, cwd: str) -> Block:
     node = ray.get_runtime_context().get_node_id()
-    return play_match(spec, index, cwd=cwd, node=node)
+    return play_block(spec, first, matches, cwd=cwd, node=node)
+
+
+def default_block_for(matches: int) -> int:
+    """The default block size on the connected cluster: about two blocks a
+    CPU, at most :data:`naosoccer.evaluation.MAX_BLOCK` matches."""
+    return default_block(matches, ray.cluster_resources().get("CPU", 1))
 
 
 def _play_all(
     specs: Sequence[EvalSpec],
+    block: Optional[int],
     binary: Optional[str],
     progress: Optional[Callable[[int, int], None]],
-) -> List[List[MatchOutcome]]:
-    """Every match of every spec as one task each, spread over the nodes."""
+) -> List[List[Block]]:
+    """Every spec's matches in blocks of ``block`` (default:
+    :func:`default_block_for` all their matches), one task a block, spread
+    over the nodes."""
     for spec in specs:
         spec.check()
+    if block is None:
+        block = default_block_for(sum(s.matches for s in specs))
     options: Dict[str, Any] = {"scheduling_strategy": "SPREAD"}
     if binary:
         options["runtime_env"] = {"env_vars": {BIN_ENV: binary}}
     task = _play.options(**options)
     cwd = os.getcwd()
-    refs = []
     owner = {}
+    total = 0
     for k, spec in enumerate(specs):
-        for i in range(spec.matches):
-            ref = task.remote(spec, i, cwd)
-            refs.append(ref)
-            owner[ref] = k
-    results: List[List[MatchOutcome]] = [[] for _ in specs]
-    pending = list(refs)
+        for first, n in blocks(spec.matches, block):
+            owner[task.remote(spec, first, n, cwd)] = (k, n)
+            total += n
+    results: List[List[Block]] = [[] for _ in specs]
+    pending = list(owner)
     done = 0
     while pending:
         ready, pending = ray.wait(pending, num_returns=1)
         for ref in ready:
-            results[owner[ref]].append(ray.get(ref))
-            done += 1
+            k, n = owner[ref]
+            results[k].append(ray.get(ref))
+            done += n
         if progress is not None:
-            progress(done, len(refs))
+            progress(done, total)
     return results
+
+
+def run_eval_blocks(
+    spec: EvalSpec,
+    *,
+    block: Optional[int] = None,
+    binary: Optional[str] = None,
+    progress: Optional[Callable[[int, int], None]] = None,
+) -> List[Block]:
+    """Plays ``spec`` on the cluster (:func:`connect` first) in blocks of
+    ``block`` matches, one task each; the blocks in order of their first
+    match, each with the node that played it. ``progress(done, total)``
+    counts matches."""
+    [played] = _play_all([spec], block, binary, progress)
+    return sorted(played, key=lambda b: b.first)
+
+
+def run_eval_text(
+    spec: EvalSpec,
+    *,
+    json_out: bool = True,
+    block: Optional[int] = None,
+    binary: Optional[str] = None,
+    progress: Optional[Callable[[int, int], None]] = None,
+) -> str:
+    """What ``naosoccer eval`` prints for ``spec`` (the JSON line, or the
+    table), played on the cluster and merged by the binary here. Its
+    ``wall_seconds`` is the sum of the blocks' times."""
+    played = run_eval_blocks(spec, block=block, binary=binary, progress=progress)
+    return merge_blocks(played, binary=binary, json_out=json_out)
 
 
 def run_eval(
     spec: EvalSpec,
     *,
+    block: Optional[int] = None,
     binary: Optional[str] = None,
     progress: Optional[Callable[[int, int], None]] = None,
 ) -> Dict[str, Any]:
-    """Plays ``spec`` on the cluster (:func:`connect` first) and returns what
-    ``naosoccer eval --json`` prints for it; ``wall_seconds`` is this run's."""
-    doc, _ = run_eval_outcomes(spec, binary=binary, progress=progress)
-    return doc
-
-
-def run_eval_outcomes(
-    spec: EvalSpec,
-    *,
-    binary: Optional[str] = None,
-    progress: Optional[Callable[[int, int], None]] = None,
-):
-    """As :func:`run_eval`, also returning the matches (with their nodes)."""
-    start = time.perf_counter()
-    [outcomes] = _play_all([spec], binary, progress)
-    return eval_document(spec, outcomes, time.perf_counter() - start), sorted(outcomes, key=lambda m: m.index)
+    """The object ``naosoccer eval --json`` prints for ``spec``, played on
+    the cluster (:func:`run_eval_text`)."""
+    return json.loads(run_eval_text(spec, block=block, binary=binary, progress=progress))
 
 
 def run_league(
@@ -170,12 +211,14 @@ def run_league(
     seed: int = 0,
     config: Optional[str] = None,
     minutes: Optional[float] = None,
+    block: Optional[int] = None,
     binary: Optional[str] = None,
     progress: Optional[Callable[[int, int], None]] = None,
 ) -> Dict[str, Any]:
     """A round robin of ``teams``: every pairing plays ``naosoccer eval
-    --matches matches --seed seed --both-sides``; all matches of all
-    pairings are tasks at once. Returns :func:`naosoccer.league.league_document`."""
+    --matches matches --seed seed --both-sides``; the blocks of all
+    pairings are tasks at once, and each pairing is merged by the binary.
+    Returns :func:`naosoccer.league.league_document`."""
     if len(teams) < 2:
         raise ValueError("a league needs at least two teams")
     if len(set(teams)) != len(teams):
@@ -188,7 +231,7 @@ def run_league(
         for i, j in pairings(len(teams))
     ]
     start = time.perf_counter()
-    per_pairing = _play_all(specs, binary, progress)
+    per_pairing = _play_all(specs, block, binary, progress)
+    evals = [json.loads(merge_blocks(played, binary=binary)) for played in per_pairing]
     wall = time.perf_counter() - start
-    evals = [eval_document(s, o, wall) for s, o in zip(specs, per_pairing)]
     return league_document(teams, matches, seed, evals, wall)

@@ -4,11 +4,12 @@ leagues with every match a Ray task (docs/RAY.md)."""
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 from typing import List, Optional
 
-from ..evaluation import EvalSpec, dumps, format_table
+from ..evaluation import MAX_BLOCK, EvalSpec
 from ..league import markdown
 
 
@@ -26,8 +27,22 @@ def _positive(text: str) -> float:
     return v
 
 
+def _block(text: str) -> int:
+    v = int(text)
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"a block has at least 1 match, got {text}")
+    return v
+
+
 def _cluster_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("cluster")
+    g.add_argument(
+        "--block",
+        type=_block,
+        default=None,
+        help="matches one Ray task plays, in one naosoccer process (default: about two blocks per "
+        f"CPU of the cluster, ceil(matches / (2 * CPUs)), at most {MAX_BLOCK})",
+    )
     g.add_argument(
         "--address",
         default=None,
@@ -62,9 +77,11 @@ def parser() -> argparse.ArgumentParser:
     e = sub.add_parser(
         "eval",
         help="naosoccer eval on a Ray cluster: same options, same table, same --json",
-        description="Plays the matches of `naosoccer eval` as Ray tasks (one match a task, each running "
-        "the naosoccer binary on its node) and prints the same table, or with --json the same JSON object: "
-        "same per-match scores, same statistics and intervals; only wall_seconds differs.",
+        description="Plays the matches of `naosoccer eval` in blocks, one Ray task a block, each running "
+        "`naosoccer eval --first-match I --matches N --json` on its node; the driver merges them with "
+        "`naosoccer eval --merge` and prints the same table, or with --json the same JSON object: same "
+        "per-match results, same statistics and intervals. Only wall_seconds differs: the sum of the "
+        "blocks' times.",
     )
     e.add_argument("--blue", required=True, help="first team: any team spec naosoccer eval takes")
     e.add_argument("--red", default="scripted", help="second team [default: scripted]")
@@ -81,7 +98,8 @@ def parser() -> argparse.ArgumentParser:
         "league",
         help="a round robin of N teams; standings with W/D/L, goals and a Bradley–Terry rating",
         description="Every pairing of the teams (in the order given, the first named playing --blue) plays "
-        "`naosoccer eval --matches M --seed S --both-sides`; all matches run as Ray tasks. Prints the "
+        "`naosoccer eval --matches M --seed S --both-sides`; the blocks of matches of all pairings run as Ray "
+        "tasks at once, and the binary merges each pairing (`naosoccer eval --merge`). Prints the "
         "standings as markdown (or JSON with --json) and writes league.md and league.json into --out.",
     )
     lg.add_argument("teams", nargs="+", help="team specs, as naosoccer eval's --blue")
@@ -107,10 +125,14 @@ def main(argv: Optional[List[str]] = None) -> int:
         # its own error, not Ray's traceback around it.
         print(f"error: {getattr(e, 'cause', None) or e}", file=sys.stderr)
         return 1
+    except RuntimeError as e:
+        # The merge on the driver failed (the binary's own message).
+        print(f"error: {e}", file=sys.stderr)
+        return 1
 
 
 def _run(args: argparse.Namespace) -> int:
-    from . import connect, run_eval, run_league
+    from . import connect, run_eval_text, run_league
 
     connect(args.address, args.num_cpus, args.binary, log_to_driver=False)
     if args.command == "eval":
@@ -119,15 +141,14 @@ def _run(args: argparse.Namespace) -> int:
             both_sides=args.both_sides, legacy_seeds=args.legacy_seeds,
             config=args.config, minutes=args.minutes,
         )
-        doc = run_eval(spec, binary=args.binary)
-        sys.stdout.write(dumps(doc) + "\n" if args.json else format_table(doc))
+        sys.stdout.write(run_eval_text(spec, json_out=args.json, block=args.block, binary=args.binary))
         return 0
     if len(args.teams) < 2 or len(set(args.teams)) != len(args.teams):
         print("error: a league needs two or more distinct teams", file=sys.stderr)
         return 2
     doc = run_league(
         args.teams, matches=args.matches, seed=args.seed, config=args.config,
-        minutes=args.minutes, binary=args.binary,
+        minutes=args.minutes, block=args.block, binary=args.binary,
     )
     md = markdown(doc)
     if args.out:
@@ -135,9 +156,14 @@ def _run(args: argparse.Namespace) -> int:
         with open(os.path.join(args.out, "league.md"), "w", encoding="utf-8") as f:
             f.write(md)
         with open(os.path.join(args.out, "league.json"), "w", encoding="utf-8") as f:
-            f.write(dumps(doc) + "\n")
-    sys.stdout.write(dumps(doc) + "\n" if args.json else md)
+            f.write(_dumps(doc) + "\n")
+    sys.stdout.write(_dumps(doc) + "\n" if args.json else md)
     return 0
+
+
+def _dumps(doc) -> str:
+    """The league's JSON: one line, keys sorted (as the binary writes its own)."""
+    return json.dumps(doc, sort_keys=True, separators=(",", ":"), allow_nan=False, ensure_ascii=False)
 
 
 if __name__ == "__main__":
