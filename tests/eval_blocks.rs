@@ -108,11 +108,18 @@ fn merged_equals_one_run(both_sides: bool) {
     assert_eq!(b["first_match"], 2);
     assert_eq!(b["matches"], 3);
     assert_eq!(b["results"].as_array().unwrap()[..], results[2..5]);
-    assert_eq!(b["scores"].as_array().unwrap()[..], whole["scores"].as_array().unwrap()[2..5]);
+    assert_eq!(
+        b["scores"].as_array().unwrap()[..],
+        whole["scores"].as_array().unwrap()[2..5]
+    );
     // The merged wall time is the sum of the blocks'.
     let sum: f64 = files
         .iter()
-        .map(|f| json(&std::fs::read_to_string(f).unwrap())["wall_seconds"].as_f64().unwrap())
+        .map(|f| {
+            json(&std::fs::read_to_string(f).unwrap())["wall_seconds"]
+                .as_f64()
+                .unwrap()
+        })
         .sum();
     assert!((got["wall_seconds"].as_f64().unwrap() - sum).abs() < 1e-9);
 
@@ -122,14 +129,24 @@ fn merged_equals_one_run(both_sides: bool) {
     let body = |t: &str| t.lines().map(str::to_string).collect::<Vec<_>>();
     let (got_lines, want_lines) = (body(&table), body(&one_run));
     assert_eq!(got_lines.len(), want_lines.len());
-    assert_eq!(got_lines[..got_lines.len() - 1], want_lines[..want_lines.len() - 1]);
+    assert_eq!(
+        got_lines[..got_lines.len() - 1],
+        want_lines[..want_lines.len() - 1]
+    );
     assert!(table.starts_with("6 matches"));
     assert_eq!(table.contains("half with the sides swapped"), both_sides);
 
     // Blocks 2..6 alone are the run of --first-match 2 --matches 4.
-    let tail = json(&stdout(merge(&[files[2], files[0]], &["--json"]), "merge tail"));
+    let tail = json(&stdout(
+        merge(&[files[2], files[0]], &["--json"]),
+        "merge tail",
+    ));
     let want = json(&eval(
-        &[&["--first-match", "2", "--matches", "4", "--json"][..], sides].concat(),
+        &[
+            &["--first-match", "2", "--matches", "4", "--json"][..],
+            sides,
+        ]
+        .concat(),
     ));
     assert_eq!(without_wall(tail), without_wall(want));
 }
@@ -146,7 +163,11 @@ fn merged_blocks_equal_one_run_with_both_sides() {
 
 fn refused(out: Output, needle: &str) {
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "accepted; stdout: {}", String::from_utf8_lossy(&out.stdout));
+    assert!(
+        !out.status.success(),
+        "accepted; stdout: {}",
+        String::from_utf8_lossy(&out.stdout)
+    );
     assert!(err.contains(needle), "expected {needle:?} in: {err}");
 }
 
@@ -159,27 +180,36 @@ fn merge_refuses_other_evaluations_overlaps_and_gaps() {
     refused(merge(&[&a, &sides], &[]), "both_sides is true there");
     let legacy = block(&d, 2, 1, &["--legacy-seeds"]);
     refused(merge(&[&a, &legacy], &[]), "seed_scheme is legacy there");
-    let longer = block(&d, 2, 1, &["--minutes", "0.35"]);
-    refused(merge(&[&a, &longer], &[]), "minutes is 0.35 there");
     let config = d.join("standup.toml");
     std::fs::write(&config, "[rules]\nstandup_seconds = 4.0\n").unwrap();
     let other_config = block(&d, 2, 1, &["--config", config.to_str().unwrap()]);
     refused(merge(&[&a, &other_config], &[]), "config_hash is");
-    // Another team or seed.
-    let out = naosoccer(&[
-        "eval", "--blue", "scripted", "--red", "idle", "--seed", "21", "--minutes", "0.3",
-        "--matches", "1", "--first-match", "2", "--json",
-    ]);
-    let idle = d.join("idle.json");
-    std::fs::write(&idle, stdout(out, "eval idle")).unwrap();
-    refused(merge(&[&a, idle.to_str().unwrap()], &[]), "--red is idle there");
-    let out = naosoccer(&[
-        "eval", "--blue", "scripted", "--red", "random", "--seed", "22", "--minutes", "0.3",
-        "--matches", "1", "--first-match", "2", "--json",
-    ]);
-    let seed = d.join("seed.json");
-    std::fs::write(&seed, stdout(out, "eval seed 22")).unwrap();
-    refused(merge(&[&a, seed.to_str().unwrap()], &[]), "seed is 22 there");
+    // Another team, seed or match length: match 2 of another evaluation.
+    for (red, seed, minutes, needle) in [
+        ("idle", "21", "0.3", "--red is idle there"),
+        ("random", "22", "0.3", "seed is 22 there"),
+        ("random", "21", "0.35", "minutes is 0.35 there"),
+    ] {
+        let out = naosoccer(&[
+            "eval",
+            "--blue",
+            "scripted",
+            "--red",
+            red,
+            "--seed",
+            seed,
+            "--minutes",
+            minutes,
+            "--matches",
+            "1",
+            "--first-match",
+            "2",
+            "--json",
+        ]);
+        let other = d.join(format!("other-{red}-{seed}-{minutes}.json"));
+        std::fs::write(&other, stdout(out, needle)).unwrap();
+        refused(merge(&[&a, other.to_str().unwrap()], &[]), needle);
+    }
 
     // Overlaps and gaps.
     let middle = block(&d, 1, 2, &[]);
@@ -199,13 +229,19 @@ fn merge_refuses_other_evaluations_overlaps_and_gaps() {
     old.as_object_mut().unwrap().remove("results");
     let old_file = d.join("old.json");
     std::fs::write(&old_file, old.to_string()).unwrap();
-    refused(merge(&[&a, old_file.to_str().unwrap()], &[]), "no per-match \"results\"");
+    refused(
+        merge(&[&a, old_file.to_str().unwrap()], &[]),
+        "no per-match \"results\"",
+    );
     // A record edited to another match.
     let mut edited = json(&std::fs::read_to_string(&b).unwrap());
     edited["results"][0]["index"] = 7.into();
     let edited_file = d.join("edited.json");
     std::fs::write(&edited_file, edited.to_string()).unwrap();
-    refused(merge(&[&a, edited_file.to_str().unwrap()], &[]), "is not match 2 of the plan");
+    refused(
+        merge(&[&a, edited_file.to_str().unwrap()], &[]),
+        "is not match 2 of the plan",
+    );
 
     // --merge plays nothing: the options of a run are refused with it.
     refused(

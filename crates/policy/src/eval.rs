@@ -641,7 +641,9 @@ pub enum ReportError {
     #[error("{label}: {reason}")]
     Format { label: String, reason: String },
     /// Two reports of different evaluations.
-    #[error("{label} is not the evaluation of {first}: {field} is {found} there, {expected} in {first}")]
+    #[error(
+        "{label} is not the evaluation of {first}: {field} is {found} there, {expected} in {first}"
+    )]
     Mismatch {
         first: String,
         label: String,
@@ -768,9 +770,11 @@ impl EvalReport {
             reason,
         };
         if v.get("results").is_none() {
-            return Err(bad("no per-match \"results\": not the output of `naosoccer eval --json`, \
+            return Err(bad(
+                "no per-match \"results\": not the output of `naosoccer eval --json`, \
                  or of one older than --merge (play it again)"
-                .into()));
+                    .into(),
+            ));
         }
         let f: ReportFile = serde_json::from_value(v.clone())
             .map_err(|e| bad(format!("not an `eval --json` object: {e}")))?;
@@ -779,8 +783,12 @@ impl EvalReport {
             "legacy" => SeedScheme::Legacy,
             other => return Err(bad(format!("unknown seed_scheme {other:?}"))),
         };
-        let config_hash = u64::from_str_radix(&f.config_hash, 16)
-            .map_err(|_| bad(format!("config_hash {:?} is not hexadecimal", f.config_hash)))?;
+        let config_hash = u64::from_str_radix(&f.config_hash, 16).map_err(|_| {
+            bad(format!(
+                "config_hash {:?} is not hexadecimal",
+                f.config_hash
+            ))
+        })?;
         let plan = EvalPlan {
             matches: f.matches,
             first_match: f.first_match,
@@ -1071,7 +1079,9 @@ mod tests {
         // Blocks 2..5 alone are the run of --first-match 2 --matches 3.
         let tail = EvalReport::merge(&[label("b", &b), label("c", &c)]).unwrap();
         assert_eq!(tail.records, block(2, 3).records);
-        assert!(tail.table().starts_with("3 matches (numbers 2 to 4 of the evaluation)"));
+        assert!(tail
+            .table()
+            .starts_with("3 matches (numbers 2 to 4 of the evaluation)"));
 
         let err = |parts: &[(String, EvalReport)]| EvalReport::merge(parts).unwrap_err();
         assert!(matches!(
