@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde_json::Value;
 
@@ -62,7 +63,11 @@ fn block(d: &Path, first: usize, matches: usize, extra: &[&str]) -> String {
     let mut args = vec!["--first-match", &f, "--matches", &m, "--json"];
     args.extend_from_slice(extra);
     let text = eval(&args);
-    let path = d.join(format!("block-{first}-{matches}.json"));
+    // Numbered: blocks of the same matches from other evaluations must not
+    // overwrite each other.
+    static FILES: AtomicUsize = AtomicUsize::new(0);
+    let n = FILES.fetch_add(1, Ordering::Relaxed);
+    let path = d.join(format!("block-{n}-{first}-{matches}.json"));
     std::fs::write(&path, &text).unwrap();
     path.to_str().unwrap().to_string()
 }
