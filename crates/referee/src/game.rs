@@ -219,16 +219,46 @@ impl Match {
 
     /// Each robot's shaping potential in the current state: `progress`
     /// times the ball's x in its team's frame minus `approach` times its
-    /// distance to the ball.
+    /// distance to the ball; with `support`, the approach term only for its
+    /// team's chaser and `support` times the distance to its support spot
+    /// for the others (`RewardConfig::support`).
     fn potentials(&self) -> [f32; ROBOTS] {
         let w = &self.cfg.reward;
         let snap = self.sim.snapshot();
         let [bx, by, _] = snap.ball.pos;
-        std::array::from_fn(|i| {
+        let dist: [f32; ROBOTS] = std::array::from_fn(|i| {
             let r = &snap.robots[i];
-            let sx = if i < PLAYERS_PER_TEAM { 1.0 } else { -1.0 };
-            let d = (bx - r.pos[0]).hypot(by - r.pos[1]);
-            w.progress * sx * bx - w.approach * d
+            (bx - r.pos[0]).hypot(by - r.pos[1])
+        });
+        if w.support <= 0.0 {
+            return std::array::from_fn(|i| {
+                let sx = if i < PLAYERS_PER_TEAM { 1.0 } else { -1.0 };
+                w.progress * sx * bx - w.approach * dist[i]
+            });
+        }
+        // Each team's chaser: its robot nearest the ball (the lower index on a tie).
+        let chaser = |team: usize| {
+            (team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM)
+                .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
+                .unwrap_or(team * PLAYERS_PER_TEAM)
+        };
+        let chasers = [chaser(0), chaser(1)];
+        let (lx, ly) = (
+            (self.field.half_length - 0.3).max(0.0),
+            (self.field.half_width - 0.3).max(0.0),
+        );
+        std::array::from_fn(|i| {
+            let team = i / PLAYERS_PER_TEAM;
+            let sx = if team == 0 { 1.0 } else { -1.0 };
+            let progress = w.progress * sx * bx;
+            if i == chasers[team] {
+                return progress - w.approach * dist[i];
+            }
+            let r = &snap.robots[i];
+            let side = if r.pos[1] >= by { 1.0 } else { -1.0 };
+            let spot_x = (bx + sx * w.support_ahead).clamp(-lx, lx);
+            let spot_y = (by + side * w.support_side).clamp(-ly, ly);
+            progress - w.support * (spot_x - r.pos[0]).hypot(spot_y - r.pos[1])
         })
     }
 
