@@ -162,6 +162,8 @@ async fn the_server_fills_empty_slots_with_a_trained_team() {
     use std::process::Stdio;
 
     let spec = format!("ppo:{}", shipped_run().display());
+    let rec_dir = std::env::temp_dir().join(format!("naosoccer-fill-rec-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&rec_dir);
     let mut server = Command::new(env!("CARGO_BIN_EXE_naosoccer"))
         .args([
             "server",
@@ -176,7 +178,8 @@ async fn the_server_fills_empty_slots_with_a_trained_team() {
             "--start-players",
             "4",
             "--exit-when-done",
-            "--no-record",
+            "--record-dir",
+            rec_dir.to_str().unwrap(),
             "--blue-token",
             BLUE,
             "--red-token",
@@ -199,6 +202,13 @@ async fn the_server_fills_empty_slots_with_a_trained_team() {
     })
     .await
     .unwrap();
+    // The match says who fills its slots: the trained team, not `fill`.
+    let mut admin = naosoccer_client::Client::connect(&addr, "admin")
+        .await
+        .unwrap();
+    let listed = admin.list_matches().await.unwrap();
+    assert_eq!(listed[0].fill_team.as_deref(), Some(spec.as_str()));
+    drop(admin);
     let red = run_team(&TeamRun {
         server: addr,
         team: Team::Red,

@@ -2,7 +2,7 @@
 use anyhow::Context;
 use clap::Args;
 use naosoccer_proto::msg::{Fill, Mode};
-use naosoccer_server::{Hooks, MatchObserver, ServerConfig, TickRecord};
+use naosoccer_server::{FillTeam, Hooks, MatchObserver, ServerConfig, TickRecord};
 use std::path::PathBuf;
 use std::sync::Arc;
 use tokio::net::TcpListener;
@@ -191,10 +191,11 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
     // A trained fill team is loaded once, here, so a bad spec fails at start;
     // every match gets a copy (its draws keyed by that match's seed).
     let learned_fill = match args.fill.as_deref() {
-        Some(f) if naosoccer_policy::is_learned_spec(f) => Some(
+        Some(f) if naosoccer_policy::is_learned_spec(f) => Some((
+            f.to_string(),
             naosoccer_policy::LearnedPolicy::load(f)
                 .with_context(|| format!("loading --fill {f}"))?,
-        ),
+        )),
         _ => None,
     };
     let tokens = cfg.resolve_tokens();
@@ -229,12 +230,15 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
         }
         let (all_done_tx, all_done) = tokio::sync::watch::channel(false);
         let mut hooks = Hooks::default();
-        if let Some(team) = learned_fill {
-            hooks.fill = Some(Arc::new(move |seed, _robot| {
-                let mut p = team.clone();
-                p.set_match_seed(seed);
-                Box::new(p) as Box<dyn naosoccer_client::Policy>
-            }));
+        if let Some((spec, team)) = learned_fill {
+            hooks.fill = Some(FillTeam {
+                spec,
+                make: Arc::new(move |seed, _robot| {
+                    let mut p = team.clone();
+                    p.set_match_seed(seed);
+                    Box::new(p) as Box<dyn naosoccer_client::Policy>
+                }),
+            });
         }
         if args.exit_when_done {
             hooks.observer = Some(Arc::new(done_counter(cfg.matches, all_done_tx)));

@@ -405,6 +405,11 @@ pub struct MatchInfo {
     pub state: MatchState,
     pub mode: Mode,
     pub fill: Fill,
+    /// The trained team that plays the slots no client joined, instead of
+    /// `fill`, when the server was started with one (`--fill ppo:DIR`: its
+    /// spec). 1.2; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill_team: Option<String>,
     pub seed: u64,
     /// Control ticks per second of game time.
     pub control_hz: f32,

@@ -35,6 +35,8 @@ pub(crate) struct MatchParams {
     pub seed: u64,
     pub mode: Mode,
     pub fill: Fill,
+    /// The trained team that plays the open slots instead of `fill`.
+    pub fill_team: Option<String>,
     pub start_players: u8,
     pub deadline: Duration,
     /// The server's start: real-time matches schedule their ticks from it.
