@@ -122,7 +122,7 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
             // About once a game minute; enough to see it move, cheap to print.
             if show_progress && (m.tick() - last_shown >= 600 || m.is_finished()) {
                 last_shown = m.tick();
-                let (b, r) = m.score();
+                let naosoccer_proto::PerTeam { blue: b, red: r } = m.score();
                 let mut err = std::io::stderr().lock();
                 let _ = write!(
                     err,

@@ -234,7 +234,7 @@ impl<W: Write + Seek> Recorder<W> {
     /// Writes the final statistics, the summary and the index, and returns
     /// the number of messages per channel and the underlying writer.
     pub fn finish(mut self, m: &Match) -> Result<(RecordingSummary, W), RecordError> {
-        let (blue, red) = m.score();
+        let naosoccer_proto::PerTeam { blue, red } = m.score();
         let fin = FinalRecord {
             ticks: m.tick(),
             score: ScoreRecord { blue, red },

@@ -15,7 +15,7 @@ impl MatchTask {
             Stop::Panicked => EndReason::Internal,
             Stop::Ended => EndReason::Ended,
         };
-        let score = self.game.goals();
+        let score = self.game.score();
         let (blue, red) = (score.blue, score.red);
         let end = MatchEnd {
             match_id: id,
