@@ -685,7 +685,7 @@ mod tests {
         Observation {
             tick: 7,
             team: Team::Red,
-            player,
+            player: Player::new(player as usize).unwrap(),
             time_left: 599.3,
             score: ScoreObs {
                 own: 1,

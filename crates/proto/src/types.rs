@@ -285,8 +285,8 @@ pub struct Observation {
     /// Control tick this observation was taken at (before the action is applied).
     pub tick: u64,
     pub team: Team,
-    /// Which of `own` is the receiving robot (0..=3).
-    pub player: u8,
+    /// Which of `own` is the receiving robot (0..=3; a number on the wire).
+    pub player: Player,
     /// Match time left in seconds.
     pub time_left: f32,
     pub score: ScoreObs,
@@ -369,7 +369,7 @@ pub struct SetPlayObs {
 impl Observation {
     /// The receiving robot.
     pub fn me(&self) -> &RobotObs {
-        &self.own[self.player as usize % PLAYERS_PER_TEAM]
+        &self.own[self.player.index()]
     }
 }
 

@@ -351,7 +351,8 @@ impl Match {
             .award(SetPlayKind::KickOff, team, (0.0, 0.0), first_tick);
     }
 
-    /// What `player` of `team` sees now, in its team's frame (attacking +x).
+    /// What `player` (0..=3; panics otherwise) of `team` sees now, in its
+    /// team's frame (attacking +x).
     pub fn observe(&self, team: Team, player: usize) -> Observation {
         let mut o = observe::blank_observation();
         self.observe_into(team, player, &mut o);

@@ -278,7 +278,7 @@ impl Scripted {
     }
 
     fn decide(&mut self, obs: &Observation) -> Action {
-        if obs.player == 0 {
+        if obs.player.index() == 0 {
             self.keeper(obs)
         } else {
             self.field_player(obs)
@@ -302,7 +302,7 @@ impl Scripted {
     }
 
     fn field_player(&mut self, obs: &Observation) -> Action {
-        let me_idx = obs.player as usize;
+        let me_idx = obs.player.index();
         let ball = [obs.ball.x, obs.ball.y];
         let engager = engager(obs);
         if engager == Some(me_idx) {
@@ -409,7 +409,7 @@ impl Scripted {
         let me = obs.me();
         let ball = [obs.ball.x, obs.ball.y];
         obs.own.iter().enumerate().any(|(i, t)| {
-            if i == obs.player as usize || t.fallen || t.x < ball[0] + 0.3 {
+            if i == obs.player.index() || t.fallen || t.x < ball[0] + 0.3 {
                 return false;
             }
             let lane = sub([t.x, t.y], ball);
@@ -589,7 +589,7 @@ mod tests {
         Observation {
             tick: 0,
             team: Team::Blue,
-            player,
+            player: naosoccer_proto::Player::new(player as usize).unwrap(),
             time_left: 600.0,
             score: Default::default(),
             own,
