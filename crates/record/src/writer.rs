@@ -222,7 +222,9 @@ impl<W: Write + Seek> Recorder<W> {
             },
         )?;
         for e in events {
-            self.write_json(Ch::Events, e.tick() * self.tick_ns, e)?;
+            // A match's own events always have a tick (never `Unknown`).
+            let at = e.tick().unwrap_or(tick);
+            self.write_json(Ch::Events, at * self.tick_ns, e)?;
         }
         self.write_state(m)?;
         if self.opts.flush_every_ticks > 0 && m.tick().is_multiple_of(self.opts.flush_every_ticks) {
