@@ -571,6 +571,11 @@ async fn a_panicking_match_ends_alone() {
     assert_eq!(a_end.tick, 20, "ticks 0..20 played, 20 panicked");
     assert_eq!(a_errors.len(), 1, "{a_errors:?}");
     assert_eq!(a_errors[0].code, ErrorCode::Internal);
+    assert_eq!(
+        (a_errors[0].in_reply_to.as_deref(), a_errors[0].tick),
+        (Some("action"), Some(20)),
+        "the error is paired with the actions for the tick that failed"
+    );
     assert_eq!(b_end.reason, EndReason::Finished);
     assert_eq!(b_end.tick, 60);
     assert!(b_errors.is_empty(), "{b_errors:?}");
