@@ -26,6 +26,8 @@ use naosoccer_record::StateRecord;
 use naosoccer_referee::Match;
 use serde_json::{json, Value};
 
+pub mod viewer;
+
 /// Where `--live` listens when no address is given.
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8765";
 

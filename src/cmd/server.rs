@@ -358,6 +358,12 @@ pub struct BenchServerArgs {
         value_name = "single|concurrent|realtime"
     )]
     pub parts: Vec<String>,
+    /// Also play the single lockstep match with `--live` on and a Foxglove
+    /// viewer connected that subscribes to all its channels (the scene
+    /// among them) and reads everything, and print both figures and the
+    /// slowdown.
+    #[arg(long)]
+    pub viewer: bool,
 }
 
 struct Latencies(std::sync::Mutex<Vec<std::time::Duration>>);
@@ -375,12 +381,67 @@ impl MatchObserver for LatencyObserver {
     fn on_end(&mut self, _: &naosoccer_proto::msg::MatchEnd, _: &naosoccer_referee::Match) {}
 }
 
+/// What the bench's viewer received.
+#[derive(Debug, Default)]
+struct Watched {
+    messages: u64,
+    scenes: u64,
+    bytes: u64,
+}
+
+/// A Foxglove viewer of `live`'s match 1, subscribed to all its channels,
+/// reading until `stop`.
+async fn bench_viewer(
+    addr: String,
+    stop: tokio::sync::oneshot::Receiver<()>,
+) -> anyhow::Result<Watched> {
+    use naosoccer::live::viewer::Viewer;
+    let mut v = Viewer::connect(&addr).await?;
+    let ch = v.advertised(1).await?;
+    let scene_id = 1;
+    let subs: Vec<(u32, &serde_json::Value)> =
+        ch.values().zip(scene_id..).map(|(c, i)| (i, c)).collect();
+    let scene_sub = subs
+        .iter()
+        .find(|(_, c)| c["topic"] == "/match/1/scene")
+        .map(|(i, _)| *i);
+    v.subscribe(&subs).await?;
+    let mut w = Watched::default();
+    tokio::pin!(stop);
+    loop {
+        tokio::select! {
+            m = v.next_raw() => match m {
+                Some((sub, b)) => {
+                    w.messages += 1;
+                    w.bytes += b.len() as u64;
+                    w.scenes += u64::from(Some(sub) == scene_sub);
+                }
+                None => break,
+            },
+            _ = &mut stop => break,
+        }
+    }
+    v.close().await;
+    Ok(w)
+}
+
 /// Plays `cfg.matches` matches with 8 robot clients each on a fresh server;
 /// returns (wall time, ticks played, client errors, missed robot-ticks).
+/// With `live`, the server streams its matches there (`--live`) and a
+/// viewer watches match 1 from before the clients join.
 async fn bench_round(
-    mut cfg: ServerConfig,
+    cfg: ServerConfig,
     hooks: Hooks,
 ) -> anyhow::Result<(std::time::Duration, u64, usize, u64)> {
+    let (el, ticks, errors, misses, _) = bench_round_watched(cfg, hooks, None).await?;
+    Ok((el, ticks, errors, misses))
+}
+
+async fn bench_round_watched(
+    mut cfg: ServerConfig,
+    mut hooks: Hooks,
+    live: Option<Arc<naosoccer::live::LiveServer>>,
+) -> anyhow::Result<(std::time::Duration, u64, usize, u64, Watched)> {
     use naosoccer_client::robot::{run_team, TeamRun};
     use naosoccer_client::PolicyKind;
     use naosoccer_proto::msg::{MatchId, Player};
@@ -392,6 +453,9 @@ async fn bench_round(
     let addr = listener.local_addr()?.to_string();
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let matches = cfg.matches;
+    if let Some(live) = &live {
+        hooks.observer = Some(Arc::new(with_live(hooks.observer.take(), live.clone())));
+    }
     let server = tokio::spawn(naosoccer_server::run_with(
         listener,
         cfg,
@@ -400,6 +464,20 @@ async fn bench_round(
             let _ = stop_rx.await;
         },
     ));
+    let (viewer_stop, viewer) = match &live {
+        Some(live) => {
+            let (tx, rx) = tokio::sync::oneshot::channel();
+            let task = tokio::spawn(bench_viewer(live.addr().to_string(), rx));
+            let l = live.clone();
+            let subscribed = tokio::task::spawn_blocking(move || {
+                l.wait_for_viewer(std::time::Duration::from_secs(30))
+            })
+            .await?;
+            anyhow::ensure!(subscribed, "the bench viewer did not subscribe within 30 s");
+            (Some(tx), Some(task))
+        }
+        None => (None, None),
+    };
     let start = std::time::Instant::now();
     let mut clients = Vec::new();
     for id in 1..=matches {
@@ -445,15 +523,30 @@ async fn bench_round(
     let elapsed = start.elapsed();
     let _ = stop_tx.send(());
     server.await??;
-    Ok((elapsed, ticks, errors, misses))
+    if let Some(tx) = viewer_stop {
+        let _ = tx.send(());
+    }
+    let watched = match viewer {
+        Some(task) => task.await??,
+        None => Watched::default(),
+    };
+    Ok((elapsed, ticks, errors, misses, watched))
 }
 
 pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
     init_logging();
+    // Before the bench's runtime: the SDK runs its own (and is stopped
+    // outside this one, when the last reference, this one, goes).
+    let live = match args.viewer && args.parts.iter().any(|p| p == "single") {
+        true => Some(Arc::new(naosoccer::live::LiveServer::start("127.0.0.1:0")?)),
+        false => None,
+    };
     let rt = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()?;
-    rt.block_on(async move {
+    let live_ref = live.clone();
+    let res = rt.block_on(async move {
+        let live = live_ref;
         let mut base = ServerConfig { mode: Mode::Lockstep, ..ServerConfig::default() };
         base.match_cfg.minutes = args.minutes;
         // Every bench client connects from 127.0.0.1: lift the per-address
@@ -474,11 +567,28 @@ pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
         );
 
         let (el, ticks, errors, misses) = bench_round(base.clone(), Hooks::default()).await?;
+        let unwatched = ticks as f64 / el.as_secs_f64();
         println!(
-            "1 lockstep match, 8 robot clients: {ticks} ticks in {:.2} s = {:.0} ticks/s (errors {errors}, missed robot-ticks {misses})",
+            "1 lockstep match, 8 robot clients: {ticks} ticks in {:.2} s = {unwatched:.0} ticks/s (errors {errors}, missed robot-ticks {misses})",
             el.as_secs_f64(),
-            ticks as f64 / el.as_secs_f64()
         );
+        if let Some(live) = &live {
+            let (el, ticks, errors, misses, w) =
+                bench_round_watched(base.clone(), Hooks::default(), Some(live.clone())).await?;
+            let watched = ticks as f64 / el.as_secs_f64();
+            println!(
+                "the same match, --live with 1 viewer subscribed to every channel: {ticks} ticks in {:.2} s = {watched:.0} ticks/s (errors {errors}, missed robot-ticks {misses}); the viewer got {} messages, {} scenes, {:.0} kB ({:.0} kB/s)",
+                el.as_secs_f64(),
+                w.messages,
+                w.scenes,
+                w.bytes as f64 / 1e3,
+                w.bytes as f64 / 1e3 / el.as_secs_f64(),
+            );
+            println!(
+                "a viewer slows the lockstep match by {:.1}% (target <= 10%)",
+                (1.0 - watched / unwatched) * 100.0
+            );
+        }
         }
 
         if run("concurrent") {
@@ -523,7 +633,10 @@ pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
         );
         }
         Ok(())
-    })
+    });
+    drop(rt);
+    drop(live);
+    res
 }
 
 fn in_process_ticks(cfg: &naosoccer_referee::MatchConfig, seed: u64) -> anyhow::Result<u64> {
