@@ -4,9 +4,9 @@
 //! match ends alone. All on 127.0.0.1; waits are on events or tokio's paused
 //! clock, never on sleeps.
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
+use common::server::*;
 use naosoccer_client::{Client, ClientError, Push};
 use naosoccer_proto::msg::{
     ClientMsg, CreateMatch, EndReason, ErrorCode, ErrorMsg, Hello, MatchEnd, MatchId, MatchInfo,
@@ -17,7 +17,6 @@ use naosoccer_referee::Match;
 use naosoccer_server::{Hooks, MatchObserver, ServerConfig, ServerError, TickRecord};
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
-use support::*;
 use tokio::net::{TcpListener, TcpSocket, TcpStream};
 use tokio::sync::oneshot;
 

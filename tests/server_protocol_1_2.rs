@@ -2,16 +2,15 @@
 //! port (issue 15 B): the referee's events pushed with every observation,
 //! the pitch announced in `joined`, `end_match`.
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
+use common::server::*;
 use naosoccer_client::{Client, ClientError, PolicyKind, Push};
 use naosoccer_proto::msg::{
     CreateMatch, EndReason, ErrorCode, Frame, Hello, MatchEnd, MatchId, MatchState, Pitch, Player,
     PlayerAction, Version, PROTOCOL_NAME,
 };
 use naosoccer_proto::{Action, Event, RobotId, Team};
-use support::*;
 
 fn all_players() -> Vec<Player> {
     Player::all().collect()
