@@ -5,7 +5,6 @@ use super::{MatchTask, Slot, Stop};
 use crate::match_msg::{deliver, send_observation, ConnEntry, ConnId, MatchCmd, Outgoing};
 use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Joined, Mode, Player};
 use naosoccer_proto::RobotId;
-use naosoccer_referee::Match;
 
 impl MatchTask {
     /// Takes a connection out of the match; its robots stand from now on.
