@@ -168,6 +168,70 @@ fn bad_input_gives_clear_errors() {
     assert!(err.contains("unknown DQN preset"), "{err}");
 }
 
+/// The pass-aware observation layout (version 3): PPO and DQN train on it,
+/// the run records it, its team plays in `eval`, and a checkpoint whose
+/// layout this build cannot encode is refused with a message naming it.
+#[cfg(feature = "train")]
+#[test]
+fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
+    for algo in ["ppo", "dqn"] {
+        let run = dir(&format!("cli_obs3_{algo}"));
+        let run_s = run.to_str().unwrap();
+        let out = naosoccer(&[
+            "train",
+            "--algo",
+            algo,
+            "--preset",
+            "team",
+            "--obs-version",
+            "3",
+            "--steps",
+            "2048",
+            "--seed",
+            "5",
+            "--matches",
+            "4",
+            "--minutes",
+            "0.1",
+            "--out",
+            run_s,
+        ]);
+        assert!(
+            out.status.success(),
+            "{algo}: train failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let config_path = run.join("config.json");
+        let mut config: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&config_path).unwrap()).unwrap();
+        assert_eq!(config["obs_version"], 3, "{algo}: the run records its layout");
+
+        let spec = format!("{algo}:{run_s}");
+        let eval = |spec: &str| {
+            naosoccer(&[
+                "eval", "--blue", spec, "--red", "scripted", "--matches", "1", "--minutes", "0.1",
+                "--seed", "2",
+            ])
+        };
+        let out = eval(&spec);
+        assert!(
+            out.status.success(),
+            "{algo}: eval failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+
+        config["obs_version"] = serde_json::json!(9);
+        std::fs::write(&config_path, config.to_string()).unwrap();
+        let out = eval(&spec);
+        assert!(!out.status.success(), "{algo}: layout 9 must be refused");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("observation layout v9") && err.contains("v1 to v3"),
+            "{algo}: {err}"
+        );
+    }
+}
+
 /// `eval --both-sides` against a shipped scripted variant: each team keeps
 /// its name, half the matches swap the sides, the win rate carries its
 /// Wilson interval, and the seeds are evaluation seeds.

@@ -3,6 +3,10 @@
 * :class:`Client`: the socket protocol (handshake, matches, join, actions).
 * :class:`NaoSoccerParallelEnv`: one team as a PettingZoo ``ParallelEnv``.
 * :class:`LocalServer`: ``naosoccer server`` as a subprocess on a free port.
+* :mod:`naosoccer.evaluation`, :mod:`naosoccer.league`: ``naosoccer eval``
+  split into single matches and merged again; round-robin standings.
+* :mod:`naosoccer.ray` (the ``ray`` extra): evaluations, leagues and RLlib
+  training on a Ray cluster (docs/RAY.md).
 
 See docs/PYTHON.md in the repository.
 """

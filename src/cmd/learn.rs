@@ -107,8 +107,10 @@ pub struct TrainArgs {
     /// degrees of straight behind it, facing it +-30 degrees.
     #[arg(long, value_parser = ["anywhere", "behind"])]
     drill: Option<String>,
-    /// Observation layout version (2, the current one; 1 for the shipped
-    /// paper-era teams' layout).
+    /// Observation layout version: 2 (the default), 3 (version 2 plus the
+    /// pass picture: teammates seen from the robot, whether they face the
+    /// ball, how clear the lane to them is) or 1 (the shipped paper-era
+    /// teams' layout; PPO only). docs/LEARNING.md lists each layout.
     #[arg(long)]
     obs_version: Option<u32>,
     /// Opponent: scripted, a scripted variant (scripted:KEY=VAL,... or

@@ -330,21 +330,19 @@ impl NStepRow {
     }
 }
 
-/// A Q-network: `OBS_DIM -> hidden x4 -> ACTIONS`.
+/// A Q-network: `input -> hidden -> ACTIONS`, where `input` is the length
+/// of its observation layout.
 pub struct QNet {
     pub vs: nn::VarStore,
     mlp: Mlp,
+    input: usize,
 }
 
 impl QNet {
-    /// `name` prefixes the variables (`q0.l0.weight`, ...), so several
-    /// networks can share one checkpoint file.
-    pub fn new(hidden: &[usize], name: &str) -> QNet {
-        QNet::with_input(OBS_DIM, hidden, name)
-    }
-
-    /// A network reading `input` features (an older observation layout's
-    /// length, for the shipped teams).
+    /// A network reading the first `input` features of each row (its
+    /// observation layout's length). `name` prefixes the variables
+    /// (`q0.l0.weight`, ...), so several networks can share one checkpoint
+    /// file.
     pub fn with_input(input: usize, hidden: &[usize], name: &str) -> QNet {
         let vs = nn::VarStore::new(tch::Device::Cpu);
         let mlp = Mlp::new(
@@ -355,11 +353,19 @@ impl QNet {
             Activation::Relu,
             InitScheme::Default,
         );
-        QNet { vs, mlp }
+        QNet { vs, mlp, input }
     }
 
+    /// Q-values of `obs` rows, `[n, width]`: rows wider than the layout
+    /// (the buffers' [`OBS_DIM`]) are cut to its prefix.
     pub fn q(&self, obs: &Tensor) -> Tensor {
-        self.mlp.forward(obs)
+        let width = obs.size()[1];
+        if width as usize == self.input {
+            self.mlp.forward(obs)
+        } else {
+            self.mlp
+                .forward(&obs.narrow(1, 0, self.input as i64).contiguous())
+        }
     }
 }
 
@@ -498,15 +504,16 @@ pub struct Dqn {
 }
 
 impl Dqn {
-    /// `robots`: how many learning robots a match has (one net each unless shared).
-    pub fn new(cfg: DqnConfig, robots: usize) -> Result<Dqn, LearnError> {
+    /// `robots`: how many learning robots a match has (one net each unless
+    /// shared); `input`: the observation layout's length.
+    pub fn new(cfg: DqnConfig, robots: usize, input: usize) -> Result<Dqn, LearnError> {
         let n = if cfg.shared { 1 } else { robots };
         let mut nets = Vec::with_capacity(n);
         let mut targets = Vec::with_capacity(n);
         let mut opts = Vec::with_capacity(n);
         for i in 0..n {
-            let net = QNet::new(&cfg.hidden, &format!("q{i}"));
-            let mut target = QNet::new(&cfg.hidden, &format!("q{i}"));
+            let net = QNet::with_input(input, &cfg.hidden, &format!("q{i}"));
+            let mut target = QNet::with_input(input, &cfg.hidden, &format!("q{i}"));
             target.vs.copy(&net.vs)?;
             opts.push(nn::Adam::default().build(&net.vs, cfg.lr)?);
             nets.push(net);
@@ -746,7 +753,7 @@ mod tests {
 
     #[test]
     fn the_q_network_has_five_linear_layers() {
-        let net = QNet::new(&DqnConfig::default().hidden, "q0");
+        let net = QNet::with_input(OBS_DIM, &DqnConfig::default().hidden, "q0");
         let mut names: Vec<String> = net
             .vs
             .variables()

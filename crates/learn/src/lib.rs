@@ -32,5 +32,5 @@ pub mod train;
 pub use error::LearnError;
 pub use naosoccer_policy::{eval, obs};
 pub use naosoccer_policy::{load_policy, load_policy_for_match, ActMode, LearnedPolicy};
-pub use obs::{ObsScale, OBS_DIM, OBS_VERSION};
+pub use obs::{ObsScale, OBS_DIM, OBS_VERSION, OBS_VERSION_LATEST};
 pub use train::{train, Algo, OpponentSpec, TrainConfig};

@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dqn::{epsilon_greedy, Dqn, DqnConfig, NStep};
 use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
-use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
+use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION, OBS_VERSION_LATEST};
 use crate::policy::{save_stores, ActMode, Hold, LearnedPolicy};
 use crate::ppo::{Ppo, PpoConfig, Rollout, Transitions, ACTIONS};
 use crate::schedule::ScheduleRunner;
@@ -383,11 +383,12 @@ pub fn self_play_snapshot(
 fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
     let supported = match cfg.algo {
         Algo::Ppo => layout_dim(cfg.obs_version).is_some(),
-        Algo::Dqn => cfg.obs_version == OBS_VERSION,
+        Algo::Dqn => cfg.obs_version >= 2 && layout_dim(cfg.obs_version).is_some(),
     };
     if !supported {
         return Err(LearnError::Config(format!(
-            "{} cannot train on observation layout v{} (this build: v{OBS_VERSION})",
+            "{} cannot train on observation layout v{} (this build encodes v1 to \
+             v{OBS_VERSION_LATEST}; DQN trains on v2 and later)",
             cfg.algo, cfg.obs_version
         )));
     }
@@ -1083,7 +1084,7 @@ fn train_dqn_decisions(
     let mut run = RunDir::create(out, cfg)?;
     let scale = run_scale(cfg);
     let robots = cfg.learners.len();
-    let mut dqn = Dqn::new(cfg.dqn.clone(), robots)?;
+    let mut dqn = Dqn::new(cfg.dqn.clone(), robots, run_scale(cfg).dim())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let rows = env.rows();
     let mut tally = Tally::new(robots);
@@ -1190,7 +1191,7 @@ fn train_dqn(
     let mut env = make_env(cfg)?;
     let mut run = RunDir::create(out, cfg)?;
     let robots = cfg.learners.len();
-    let mut dqn = Dqn::new(cfg.dqn.clone(), robots)?;
+    let mut dqn = Dqn::new(cfg.dqn.clone(), robots, run_scale(cfg).dim())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let rows = env.rows();
     let mut tally = Tally::new(robots);

@@ -22,7 +22,7 @@ pub enum PolicyError {
     },
     #[error("invalid policy spec {spec:?}: {reason}")]
     Spec { spec: String, reason: String },
-    #[error("{path}: trained on observation layout v{found}, this build reads v{expected}")]
+    #[error("{path}: trained on observation layout v{found}, this build reads v1 to v{expected}")]
     ObsVersion {
         path: PathBuf,
         found: u32,

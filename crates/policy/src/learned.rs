@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 use crate::actions::MASKED_LOGIT;
 use crate::actions::{argmax, sample, sample_uniform, DecisionConfig, Hold, ACTIONS, SHOOT};
 use crate::mlp::{Activation, Mlp, Weights};
-use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION};
+use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION_LATEST};
 use crate::PolicyError;
 
 /// The learning algorithm a run used.
@@ -289,7 +289,7 @@ impl LearnedPolicy {
             return Err(PolicyError::ObsVersion {
                 path: cfg_path,
                 found: cfg.obs_version,
-                expected: OBS_VERSION,
+                expected: OBS_VERSION_LATEST,
             });
         }
         let mut p =

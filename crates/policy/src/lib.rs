@@ -29,7 +29,7 @@ pub use learned::{
     is_learned_spec, load_policy, load_policy_for_match, ActMode, Algo, LearnedPolicy, PlayConfig,
 };
 pub use mlp::{Activation, Mlp, Weights};
-pub use obs::{ObsScale, OBS_DIM, OBS_VERSION};
+pub use obs::{ObsScale, OBS_DIM, OBS_VERSION, OBS_VERSION_LATEST};
 
 /// Picks actions for whole teams of many matches at once.
 pub trait BatchActor: Send {

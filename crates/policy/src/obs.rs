@@ -3,7 +3,11 @@
 //! was trained on and refuses to load under a version this build cannot
 //! encode. docs/LEARNING.md lists both layouts; a test checks they agree.
 //!
-//! - Version 2 (current, [`OBS_DIM`] = 75 entries): egocentric first. The
+//! - Version 3 ([`OBS_DIM`] = 89 entries): version 2, then what a pass
+//!   needs seen from the acting robot: each teammate ahead of and beside it
+//!   (where a kick goes), whether that teammate faces the ball, how clear
+//!   the lane from the ball to it is, and the nearest opponent.
+//! - Version 2 (the default for new runs, 75 entries): egocentric first. The
 //!   acting robot, then the ball seen from it at kick-reach resolution, the
 //!   two goals seen from it, the ball, the other three teammates, the
 //!   opponents, and the game state (clock, half, score, set play, role).
@@ -21,11 +25,18 @@
 use naosoccer_proto::{Observation, RobotObs, PLAYERS_PER_TEAM};
 use serde::{Deserialize, Serialize};
 
-/// The layout new runs are trained on; bumped whenever a layout is added.
+/// The layout new runs are trained on unless they choose another
+/// (`train --obs-version`).
 pub const OBS_VERSION: u32 = 2;
 
-/// Row width of observation buffers: the widest layout's length.
-pub const OBS_DIM: usize = 75;
+/// The newest layout this build encodes.
+pub const OBS_VERSION_LATEST: u32 = 3;
+
+/// Row width of observation buffers: the widest layout's length (version 3).
+pub const OBS_DIM: usize = 89;
+
+/// Length of layout version 2.
+pub const OBS_DIM_V2: usize = 75;
 
 /// Length of layout version 1.
 pub const OBS_DIM_V1: usize = 48;
@@ -41,9 +52,23 @@ pub const NEAR_CLAMP: f32 = 4.0;
 /// Set-play ticks left are divided by this.
 pub const SET_PLAY_TICKS_SCALE: f32 = 100.0;
 
+/// A pass lane's clearance (the nearest opponent's distance from the
+/// segment ball to teammate) is divided by this (metres) and clamped to 1.
+pub const LANE_SCALE: f32 = 1.0;
+
+/// The entries of layout version 3, in order, as docs/LEARNING.md lists them:
+/// version 2's, then these.
+#[rustfmt::skip]
+pub const FEATURE_NAMES_V3_TAIL: [&str; OBS_DIM - OBS_DIM_V2] = [
+    "mate1_ahead", "mate1_side", "mate1_faces_ball", "mate1_lane",
+    "mate2_ahead", "mate2_side", "mate2_faces_ball", "mate2_lane",
+    "mate3_ahead", "mate3_side", "mate3_faces_ball", "mate3_lane",
+    "opp_near_ahead", "opp_near_side",
+];
+
 /// The entries of layout version 2, in order, as docs/LEARNING.md lists them.
 #[rustfmt::skip]
-pub const FEATURE_NAMES: [&str; OBS_DIM] = [
+pub const FEATURE_NAMES: [&str; OBS_DIM_V2] = [
     "me_x", "me_y", "me_cos", "me_sin", "me_fallen", "me_busy", "me_control",
     "ball_dist", "ball_cos", "ball_sin", "ball_ahead", "ball_side", "ball_in_reach",
     "goal_dist", "goal_cos", "goal_sin", "own_goal_dist", "own_goal_cos", "own_goal_sin",
@@ -84,7 +109,8 @@ pub const FEATURE_NAMES_V1: [&str; OBS_DIM_V1] = [
 pub fn layout_dim(version: u32) -> Option<usize> {
     match version {
         1 => Some(OBS_DIM_V1),
-        2 => Some(OBS_DIM),
+        2 => Some(OBS_DIM_V2),
+        3 => Some(OBS_DIM),
         _ => None,
     }
 }
@@ -125,6 +151,19 @@ impl KickReach {
         let (ahead, side) = ball_in_robot_frame(obs);
         self.contains(ahead, side)
     }
+}
+
+/// The distance from point `p` to the segment `a`-`b`.
+fn segment_distance(a: [f32; 2], b: [f32; 2], p: [f32; 2]) -> f32 {
+    let (ux, uy) = (b[0] - a[0], b[1] - a[1]);
+    let (vx, vy) = (p[0] - a[0], p[1] - a[1]);
+    let len2 = ux * ux + uy * uy;
+    let t = if len2 < 1e-12 {
+        0.0
+    } else {
+        ((ux * vx + uy * vy) / len2).clamp(0.0, 1.0)
+    };
+    (vx - t * ux).hypot(vy - t * uy)
 }
 
 fn default_match_seconds() -> f32 {
@@ -194,8 +233,63 @@ impl ObsScale {
                 self.encode_v1(obs, &mut out[..OBS_DIM_V1]);
                 out[OBS_DIM_V1..].fill(0.0);
             }
-            _ => self.encode_v2(obs, out),
+            2 => {
+                self.encode_v2(obs, &mut out[..OBS_DIM_V2]);
+                out[OBS_DIM_V2..].fill(0.0);
+            }
+            _ => {
+                self.encode_v2(obs, &mut out[..OBS_DIM_V2]);
+                self.encode_v3_tail(obs, &mut out[OBS_DIM_V2..]);
+            }
         }
+    }
+
+    /// Version 3's entries after version 2's: the pass picture from the
+    /// acting robot. A kick goes along its heading, so a teammate far ahead
+    /// and little to the side is one a kick reaches.
+    fn encode_v3_tail(&self, obs: &Observation, out: &mut [f32]) {
+        let sx = 1.0 / self.half_length;
+        let me = obs.player as usize % PLAYERS_PER_TEAM;
+        let r = obs.me();
+        let (s, c) = r.heading.sin_cos();
+        let local = |x: f32, y: f32| {
+            let (dx, dy) = (x - r.x, y - r.y);
+            (c * dx + s * dy, -s * dx + c * dy)
+        };
+        let (bx, by) = (obs.ball.x, obs.ball.y);
+        let mut i = 0;
+        for p in (0..PLAYERS_PER_TEAM).filter(|&p| p != me) {
+            let m = &obs.own[p];
+            let (ahead, side) = local(m.x, m.y);
+            out[i] = ahead * sx;
+            out[i + 1] = side * sx;
+            // Cosine between the teammate's heading and its direction to the ball.
+            let (dx, dy) = (bx - m.x, by - m.y);
+            let d = (dx * dx + dy * dy).sqrt();
+            out[i + 2] = if d < 1e-6 {
+                1.0
+            } else {
+                (m.heading.cos() * dx + m.heading.sin() * dy) / d
+            };
+            let clear = obs
+                .opponents
+                .iter()
+                .filter(|o| !o.fallen)
+                .map(|o| segment_distance([bx, by], [m.x, m.y], [o.x, o.y]))
+                .fold(f32::INFINITY, f32::min);
+            out[i + 3] = (clear / LANE_SCALE).min(1.0);
+            i += 4;
+        }
+        let mut nearest = (f32::INFINITY, 0.0, 0.0);
+        for o in &obs.opponents {
+            let (ahead, side) = local(o.x, o.y);
+            let d = ahead * ahead + side * side;
+            if d < nearest.0 {
+                nearest = (d, ahead, side);
+            }
+        }
+        out[i] = nearest.1 * sx;
+        out[i + 1] = nearest.2 * sx;
     }
 
     fn encode_v2(&self, obs: &Observation, out: &mut [f32]) {
@@ -335,9 +429,10 @@ mod tests {
 
     #[test]
     fn layouts_match_their_documentation() {
-        for (tag, names) in [
-            ("obs-layout", &FEATURE_NAMES[..]),
-            ("obs-layout-v1", &FEATURE_NAMES_V1[..]),
+        for (tag, names, first) in [
+            ("obs-layout", &FEATURE_NAMES[..], 0),
+            ("obs-layout-v1", &FEATURE_NAMES_V1[..], 0),
+            ("obs-layout-v3", &FEATURE_NAMES_V3_TAIL[..], OBS_DIM_V2),
         ] {
             let doc = documented_layout(tag);
             assert_eq!(
@@ -346,11 +441,12 @@ mod tests {
                 "docs/LEARNING.md lists every entry of {tag} once"
             );
             for (i, (index, name)) in doc.iter().enumerate() {
-                assert_eq!(*index, i, "{tag}: entries in order");
+                assert_eq!(*index, first + i, "{tag}: entries in order");
                 assert_eq!(name, names[i], "{tag}: entry {i}");
             }
         }
-        assert_eq!(layout_dim(OBS_VERSION), Some(OBS_DIM));
+        assert_eq!(layout_dim(OBS_VERSION), Some(OBS_DIM_V2));
+        assert_eq!(layout_dim(OBS_VERSION_LATEST), Some(OBS_DIM));
         let doc = include_str!("../../../docs/LEARNING.md");
         assert!(
             doc.contains(&format!("version {OBS_VERSION}")),
@@ -363,7 +459,10 @@ mod tests {
     }
 
     fn named2(v: &[f32], name: &str) -> f32 {
-        v[FEATURE_NAMES.iter().position(|n| *n == name).unwrap()]
+        match FEATURE_NAMES.iter().position(|n| *n == name) {
+            Some(i) => v[i],
+            None => v[OBS_DIM_V2 + FEATURE_NAMES_V3_TAIL.iter().position(|n| *n == name).unwrap()],
+        }
     }
 
     fn test_scale(version: u32) -> ObsScale {
@@ -526,5 +625,51 @@ mod tests {
         scale.encode(&obs, &mut v);
         assert_eq!(named2(&v, "ball_in_reach"), 0.0);
         assert!(!scale.kick.in_reach(&obs));
+    }
+
+    #[test]
+    fn version_2_rows_zero_the_tail_and_version_3_extends_them() {
+        let obs = sample_observation();
+        let mut v2 = [7.0; OBS_DIM];
+        test_scale(2).encode(&obs, &mut v2);
+        assert!(v2[OBS_DIM_V2..].iter().all(|&x| x == 0.0));
+        assert_eq!(test_scale(2).dim(), OBS_DIM_V2);
+        let mut v3 = [7.0; OBS_DIM];
+        test_scale(3).encode(&obs, &mut v3);
+        assert_eq!(v3[..OBS_DIM_V2], v2[..OBS_DIM_V2], "version 3 starts with version 2");
+        assert_eq!(test_scale(3).dim(), OBS_DIM);
+    }
+
+    #[test]
+    fn version_3_encoding_puts_each_quantity_where_documented() {
+        let obs = sample_observation();
+        let mut v = [0.0; OBS_DIM];
+        test_scale(3).encode(&obs, &mut v);
+        let n = |name: &str| named2(&v, name);
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+        // Player 2 stands at (1, -1) facing -x. Teammate 0 at (-2.7, 0) is
+        // 3.7 m ahead of it and 1 m to its right.
+        assert!(close(n("mate1_ahead"), 3.7 / 3.0) && close(n("mate1_side"), -1.0 / 3.0));
+        // Teammate 1 at (-1.5, 1.125) faces +y; the ball at (0, -1) is
+        // below and to its right: cos = (dy) / d with d = |(1.5, -2.125)|.
+        let d = 1.5f32.hypot(2.125);
+        assert!(close(n("mate2_faces_ball"), -2.125 / d));
+        // Teammate 3 at the centre faces +x; the ball (0, -1) lies at 90 degrees.
+        assert!(close(n("mate3_faces_ball"), 0.0));
+        // Opponents 1 and 2 stand at the centre, on teammate 3 itself: its
+        // lane from the ball is blocked at its end.
+        assert!(close(n("mate3_lane"), 0.0));
+        // Teammate 0's lane from (0, -1) to (-2.7, 0): opponent 3 at
+        // (-0.3, -0.45) is the nearest to it.
+        let (ux, uy) = (-2.7f32, 1.0f32);
+        let (px, py) = (-0.3f32, 0.55f32);
+        let t = (ux * px + uy * py) / (ux * ux + uy * uy);
+        let lane = (px - t * ux).hypot(py - t * uy);
+        assert!(close(n("mate1_lane"), lane), "{} vs {lane}", n("mate1_lane"));
+        // The nearest opponent to (1, -1) is opponent 3 at (-0.3, -0.45)
+        // (the two at the centre are 1.414 m away): 1.3 m ahead and 0.55 m
+        // to the right (facing -x, its left is -y).
+        assert!(close(n("opp_near_ahead"), 1.3 / 3.0));
+        assert!(close(n("opp_near_side"), -0.55 / 3.0), "{}", n("opp_near_side"));
     }
 }
