@@ -249,7 +249,7 @@ impl ObsScale {
     /// and little to the side is one a kick reaches.
     fn encode_v3_tail(&self, obs: &Observation, out: &mut [f32]) {
         let sx = 1.0 / self.half_length;
-        let me = obs.player as usize % PLAYERS_PER_TEAM;
+        let me = obs.player.index();
         let r = obs.me();
         let (s, c) = r.heading.sin_cos();
         let local = |x: f32, y: f32| {
