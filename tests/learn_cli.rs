@@ -4,15 +4,12 @@
 //! trained teams in matches (in every build); and, in a build without
 //! training, what `train` says to run.
 
+mod common;
+
+use common::naosoccer;
+
 use std::path::PathBuf;
 use std::process::Command;
-
-fn naosoccer(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_naosoccer"))
-        .args(args)
-        .output()
-        .expect("run naosoccer")
-}
 
 fn dir(name: &str) -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);

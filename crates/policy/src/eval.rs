@@ -13,7 +13,9 @@
 //! matches in one forward pass per tick.
 
 use naosoccer_client::{Policy, PolicyKind};
-use naosoccer_proto::{Action, MatchStats, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_proto::{
+    Action, MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
+};
 use naosoccer_referee::{Match, MatchConfig};
 
 use crate::learned::LearnedPolicy;
@@ -128,8 +130,8 @@ impl EvalPlan {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MatchResult {
     pub seed: u64,
-    /// By colour: (blue, red).
-    pub score: (u32, u32),
+    /// By colour.
+    pub score: Score,
     pub stats: MatchStats,
     pub state_hash: u64,
     /// The first team (`--blue`) played red.
@@ -148,10 +150,7 @@ impl MatchResult {
 
     /// Goals of the first team (`first`: true) or the second.
     pub fn goals_of(&self, first: bool) -> u32 {
-        match self.team_of(first) {
-            Team::Blue => self.score.0,
-            Team::Red => self.score.1,
-        }
+        *self.score.get(self.team_of(first))
     }
 }
 
@@ -631,9 +630,9 @@ mod tests {
         let by_colour: u32 = (0..4)
             .map(|i| {
                 if i % 2 == 1 {
-                    reversed[i].score.1
+                    reversed[i].score.red
                 } else {
-                    straight[i].score.0
+                    straight[i].score.blue
                 }
             })
             .sum();

@@ -249,7 +249,7 @@ impl ObsScale {
     /// and little to the side is one a kick reaches.
     fn encode_v3_tail(&self, obs: &Observation, out: &mut [f32]) {
         let sx = 1.0 / self.half_length;
-        let me = obs.player as usize % PLAYERS_PER_TEAM;
+        let me = obs.player.index();
         let r = obs.me();
         let (s, c) = r.heading.sin_cos();
         let local = |x: f32, y: f32| {
@@ -294,7 +294,7 @@ impl ObsScale {
 
     fn encode_v2(&self, obs: &Observation, out: &mut [f32]) {
         let (sx, sy) = (1.0 / self.half_length, 1.0 / self.half_width);
-        let me = obs.player as usize % PLAYERS_PER_TEAM;
+        let me = obs.player.index();
         let r = obs.me();
         let (s, c) = r.heading.sin_cos();
         let flag = |b: bool| f32::from(u8::from(b));
@@ -387,7 +387,7 @@ impl ObsScale {
         out[17] = obs.ball.y * sy;
         out[18] = obs.ball.vx / BALL_SPEED_SCALE;
         out[19] = obs.ball.vy / BALL_SPEED_SCALE;
-        let me = obs.player as usize % PLAYERS_PER_TEAM;
+        let me = obs.player.index();
         for p in 0..PLAYERS_PER_TEAM {
             out[40 + p] = if p == me { 1.0 } else { 0.0 };
         }
@@ -490,7 +490,7 @@ mod tests {
         Observation {
             tick: 7,
             team: Team::Red,
-            player: 2,
+            player: naosoccer_proto::Player::new(2).unwrap(),
             time_left: 100.0,
             score: ScoreObs {
                 own: 1,

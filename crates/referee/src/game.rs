@@ -1,6 +1,7 @@
 //! `Match`, the one driver: apply actions, step the sim for one control tick,
 //! run the rules, apply their commands, keep score and statistics.
 
+use naosoccer_proto::msg::{Frame, Pitch};
 use naosoccer_proto::{
     Action, Event, MatchStats, Observation, RobotId, Score, SetPlayKind, SetPlayObs, Team,
     PLAYERS_PER_TEAM, ROBOTS,
@@ -380,7 +381,8 @@ impl Match {
             .award(SetPlayKind::KickOff, team, (0.0, 0.0), first_tick);
     }
 
-    /// What `player` of `team` sees now, in its team's frame (attacking +x).
+    /// What `player` (0..=3; panics otherwise) of `team` sees now, in its
+    /// team's frame (attacking +x).
     pub fn observe(&self, team: Team, player: usize) -> Observation {
         let mut o = observe::blank_observation();
         self.observe_into(team, player, &mut o);
@@ -432,15 +434,25 @@ impl Match {
         self.steps_per_tick
     }
 
-    /// Goals per team.
-    pub fn goals(&self) -> Score {
-        self.score
+    /// The pitch as the protocol's `joined` announces it.
+    pub fn pitch(&self) -> Pitch {
+        let cfg = &self.cfg;
+        Pitch {
+            field_length: cfg.sim.field_length,
+            field_width: cfg.sim.field_width,
+            goal_width: cfg.sim.goal_width,
+            goal_depth: cfg.sim.goal_depth,
+            goal_height: cfg.sim.goal_height,
+            ball_radius: cfg.sim.ball_radius,
+            b_d: cfg.rules.b_d,
+            b_rad: cfg.rules.b_rad,
+            frame: Frame::Team,
+        }
     }
 
-    /// [`goals`](Self::goals) as a `(blue, red)` pair, for callers that
-    /// destructure it.
-    pub fn score(&self) -> (u32, u32) {
-        (self.score.blue, self.score.red)
+    /// Goals per team.
+    pub fn score(&self) -> Score {
+        self.score
     }
 
     /// Statistics so far; control rates are shares of the ticks in which any

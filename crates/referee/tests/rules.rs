@@ -2,7 +2,7 @@
 
 use std::f32::consts::PI;
 
-use naosoccer_proto::{Action, Event, RobotId, SetPlayKind, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_proto::{Action, Event, RobotId, Score, SetPlayKind, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 
 const STAY: [Action; ROBOTS] = [Action::Stay; ROBOTS];
@@ -67,7 +67,7 @@ fn ball_rolled_over_the_line_between_the_posts_scores_and_goes_back_to_the_centr
         ),
         "no blue goal in {events:?}"
     );
-    assert_eq!(m.score(), (1, 0));
+    assert_eq!(m.score(), Score { blue: 1, red: 0 });
     assert_eq!(m.stats().blue.goals, 1);
     // Red conceded, so red kicks off; the ball is back on the centre spot.
     assert!(events.iter().any(|e| matches!(
@@ -96,7 +96,7 @@ fn ball_rolled_wide_of_the_post_is_out_not_a_goal() {
     let events = run_until(&mut m, &STAY, 40, |_, ev| {
         ev.iter().any(|e| matches!(e, Event::BallOut { .. }))
     });
-    assert_eq!(m.score(), (0, 0), "{events:?}");
+    assert_eq!(m.score(), Score::default(), "{events:?}");
     assert!(!events.iter().any(|e| matches!(e, Event::Goal { .. })));
     let out = events.iter().find_map(|e| match e {
         Event::BallOut { x, y, .. } => Some((*x, *y)),
@@ -832,7 +832,7 @@ fn self_play_results(kind: naosoccer_client::PolicyKind, n: u64, minutes: f32) -
         }
         m.score()
     };
-    let scores: Vec<(u32, u32)> = std::thread::scope(|s| {
+    let scores: Vec<Score> = std::thread::scope(|s| {
         let a = s.spawn(|| (0..n).step_by(2).map(play).collect::<Vec<_>>());
         let b = s.spawn(|| (1..n).step_by(2).map(play).collect::<Vec<_>>());
         let mut v = a.join().unwrap();
@@ -840,8 +840,8 @@ fn self_play_results(kind: naosoccer_client::PolicyKind, n: u64, minutes: f32) -
         v
     });
     let mut r = [0; 3];
-    for (b, red) in scores {
-        r[match b.cmp(&red) {
+    for s in scores {
+        r[match s.blue.cmp(&s.red) {
             std::cmp::Ordering::Greater => 0,
             std::cmp::Ordering::Less => 1,
             std::cmp::Ordering::Equal => 2,
@@ -878,4 +878,18 @@ fn issue_12_mirror_matches_favour_neither_side() {
             "{kind} vs {kind}: blue won {blue}, red {red} ({draws} draws)"
         );
     }
+}
+
+/// Issue 15: the scripted team's defaults are the default match's pitch
+/// (sizes and `b_rad`), and its kick reach lies within the sim's, so the
+/// constants cannot drift from `assets/match.toml` unnoticed.
+#[test]
+fn scripted_defaults_agree_with_the_default_match() {
+    use naosoccer_client::policy::ScriptedParams;
+    let m = Match::new(&MatchConfig::default(), 1).unwrap();
+    let d = ScriptedParams::default();
+    assert_eq!(ScriptedParams::for_pitch(&m.pitch()), d);
+    let sim = &m.config().sim;
+    assert!(sim.kick_reach_min <= d.reach_min && d.reach_max <= sim.kick_reach_max);
+    assert!(d.reach_half_width <= sim.kick_half_width);
 }
