@@ -461,7 +461,13 @@ mod tests {
     fn named2(v: &[f32], name: &str) -> f32 {
         match FEATURE_NAMES.iter().position(|n| *n == name) {
             Some(i) => v[i],
-            None => v[OBS_DIM_V2 + FEATURE_NAMES_V3_TAIL.iter().position(|n| *n == name).unwrap()],
+            None => {
+                v[OBS_DIM_V2
+                    + FEATURE_NAMES_V3_TAIL
+                        .iter()
+                        .position(|n| *n == name)
+                        .unwrap()]
+            }
         }
     }
 
@@ -636,7 +642,11 @@ mod tests {
         assert_eq!(test_scale(2).dim(), OBS_DIM_V2);
         let mut v3 = [7.0; OBS_DIM];
         test_scale(3).encode(&obs, &mut v3);
-        assert_eq!(v3[..OBS_DIM_V2], v2[..OBS_DIM_V2], "version 3 starts with version 2");
+        assert_eq!(
+            v3[..OBS_DIM_V2],
+            v2[..OBS_DIM_V2],
+            "version 3 starts with version 2"
+        );
         assert_eq!(test_scale(3).dim(), OBS_DIM);
     }
 
@@ -665,11 +675,19 @@ mod tests {
         let (px, py) = (-0.3f32, 0.55f32);
         let t = (ux * px + uy * py) / (ux * ux + uy * uy);
         let lane = (px - t * ux).hypot(py - t * uy);
-        assert!(close(n("mate1_lane"), lane), "{} vs {lane}", n("mate1_lane"));
+        assert!(
+            close(n("mate1_lane"), lane),
+            "{} vs {lane}",
+            n("mate1_lane")
+        );
         // The nearest opponent to (1, -1) is opponent 3 at (-0.3, -0.45)
         // (the two at the centre are 1.414 m away): 1.3 m ahead and 0.55 m
         // to the right (facing -x, its left is -y).
         assert!(close(n("opp_near_ahead"), 1.3 / 3.0));
-        assert!(close(n("opp_near_side"), -0.55 / 3.0), "{}", n("opp_near_side"));
+        assert!(
+            close(n("opp_near_side"), -0.55 / 3.0),
+            "{}",
+            n("opp_near_side")
+        );
     }
 }

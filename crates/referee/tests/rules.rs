@@ -712,7 +712,11 @@ fn support_shaping_pays_the_chaser_for_the_ball_and_the_others_for_their_spots()
     // 1.0 m ahead of it and 0.5 m to its right; player 0's spot is the
     // same, far away.
     assert!((before[1] + 0.3).abs() < 0.02, "{}", before[1]);
-    assert!((before[2] + 2.0 * 1.0f32.hypot(0.5)).abs() < 0.02, "{}", before[2]);
+    assert!(
+        (before[2] + 2.0 * 1.0f32.hypot(0.5)).abs() < 0.02,
+        "{}",
+        before[2]
+    );
     assert!(before[0] < -8.0, "{}", before[0]);
 }
 
