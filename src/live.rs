@@ -26,6 +26,8 @@ use naosoccer_record::StateRecord;
 use naosoccer_referee::Match;
 use serde_json::{json, Value};
 
+pub mod viewer;
+
 /// Where `--live` listens when no address is given.
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8765";
 
@@ -323,10 +325,21 @@ impl MatchStream {
             }
         }
         if let Some(s) = stats {
-            if self.stats.has_sinks() {
-                if let Ok(b) = serde_json::to_vec(s) {
-                    self.stats.log_with_meta(&b, meta);
-                }
+            self.publish_stats(s, meta);
+        }
+    }
+
+    /// [`MatchStream::tick`] for the in-process match `m` as it stands,
+    /// with its statistics when `with_stats`.
+    pub fn tick_of(&mut self, m: &Match, events: &[Event], with_stats: bool) {
+        let stats = with_stats.then(|| m.stats());
+        self.tick(&StateRecord::of(m), events, stats.as_ref());
+    }
+
+    fn publish_stats(&self, stats: &MatchStats, meta: PartialMetadata) {
+        if self.stats.has_sinks() {
+            if let Ok(b) = serde_json::to_vec(stats) {
+                self.stats.log_with_meta(&b, meta);
             }
         }
     }
@@ -418,8 +431,7 @@ impl naosoccer_server::MatchObserver for LiveObserver {
     fn on_start(&mut self, _info: &naosoccer_proto::msg::MatchInfo, game: &Match) {
         self.stream.begin(game);
         if self.stream.watched() {
-            self.stream
-                .tick(&StateRecord::of(game), &[], Some(&game.stats()));
+            self.stream.tick_of(game, &[], true);
         }
     }
 
@@ -435,23 +447,18 @@ impl naosoccer_server::MatchObserver for LiveObserver {
         if due || m.is_finished() {
             self.last_sent = Some(now);
             // Statistics at least 10 ticks apart, and at the end.
-            let stats = (m.tick() >= self.last_stats_tick + PITCH_EVERY || m.is_finished())
-                .then(|| m.stats());
-            if stats.is_some() {
+            let with_stats = m.tick() >= self.last_stats_tick + PITCH_EVERY || m.is_finished();
+            if with_stats {
                 self.last_stats_tick = m.tick();
             }
-            self.stream
-                .tick(&StateRecord::of(m), r.events, stats.as_ref());
+            self.stream.tick_of(m, r.events, with_stats);
         } else {
             self.stream.events_only(r.events);
         }
     }
 
     fn on_end(&mut self, end: &naosoccer_proto::msg::MatchEnd, _game: &Match) {
-        if self.stream.stats.has_sinks() {
-            if let Ok(b) = serde_json::to_vec(&end.stats) {
-                self.stream.stats.log(&b);
-            }
-        }
+        self.stream
+            .publish_stats(&end.stats, PartialMetadata::with_log_time(wall_ns()));
     }
 }

@@ -113,7 +113,7 @@ pub fn run_to_end_with(
         ticks: m.tick(),
         sim_seconds: m.sim_seconds(),
         wall_seconds,
-        score: m.goals(),
+        score: m.score(),
         stats: m.stats(),
         state_hash: m.state_hash(),
         events,

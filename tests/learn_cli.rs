@@ -4,15 +4,12 @@
 //! trained teams in matches (in every build); and, in a build without
 //! training, what `train` says to run.
 
+mod common;
+
+use common::naosoccer;
+
 use std::path::PathBuf;
 use std::process::Command;
-
-fn naosoccer(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_naosoccer"))
-        .args(args)
-        .output()
-        .expect("run naosoccer")
-}
 
 fn dir(name: &str) -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
@@ -207,13 +204,25 @@ fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
         let config_path = run.join("config.json");
         let mut config: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&config_path).unwrap()).unwrap();
-        assert_eq!(config["obs_version"], 3, "{algo}: the run records its layout");
+        assert_eq!(
+            config["obs_version"], 3,
+            "{algo}: the run records its layout"
+        );
 
         let spec = format!("{algo}:{run_s}");
         let eval = |spec: &str| {
             naosoccer(&[
-                "eval", "--blue", spec, "--red", "scripted", "--matches", "1", "--minutes", "0.1",
-                "--seed", "2",
+                "eval",
+                "--blue",
+                spec,
+                "--red",
+                "scripted",
+                "--matches",
+                "1",
+                "--minutes",
+                "0.1",
+                "--seed",
+                "2",
             ])
         };
         let out = eval(&spec);

@@ -3,31 +3,55 @@
 //! the scripted team plays red, and the match equals the same match played
 //! in process with the same networks, bit for bit.
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
 use std::path::PathBuf;
 use std::process::Command;
 
-use naosoccer::runner::run_to_end_with;
+use common::naosoccer;
+use common::server::*;
+use naosoccer::runner::{run_to_end_with, MatchOutcome};
 use naosoccer_client::robot::{run_team, TeamRun};
 use naosoccer_client::{Policy, PolicyKind};
-use naosoccer_proto::msg::{EndReason, MatchId, Player};
+use naosoccer_proto::msg::{EndReason, MatchEnd, MatchId, Player};
 use naosoccer_proto::{RobotId, Team};
-use naosoccer_referee::Match;
-use support::*;
-
-fn naosoccer(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_naosoccer"))
-        .args(args)
-        .output()
-        .expect("run naosoccer")
-}
+use naosoccer_referee::{Match, MatchConfig};
 
 /// A shipped trained team (a sampling PPO team: its draws are keyed by the
 /// match seed, so both matches draw alike).
 fn shipped_run() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/policies/ppo-paper-seed1")
+}
+
+/// The match in process: `spec`'s trained team blue, the scripted team red;
+/// `on_tick` sees the match after every tick.
+fn trained_blue_in_process(
+    spec: &str,
+    cfg: &MatchConfig,
+    seed: u64,
+    mut on_tick: impl FnMut(&Match),
+) -> MatchOutcome {
+    let policies: Vec<Box<dyn Policy>> = RobotId::all()
+        .map(|robot| match robot.team() {
+            Team::Blue => naosoccer_policy::load_policy_for_match(spec, seed).unwrap(),
+            Team::Red => PolicyKind::Scripted.build(seed, robot),
+        })
+        .collect();
+    run_to_end_with(Match::new(cfg, seed).unwrap(), policies, |m, _, _| {
+        on_tick(m)
+    })
+}
+
+/// The match a client saw end is the in-process one, bit for bit.
+fn assert_same_match(end: &MatchEnd, out: &MatchOutcome) {
+    assert_eq!(end.tick, out.ticks);
+    assert_eq!(end.score, out.score);
+    assert_eq!(end.stats, out.stats, "same semantics through the socket");
+    assert_eq!(
+        end.state_hash,
+        format!("{:016x}", out.state_hash),
+        "same final state, bit for bit"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -84,14 +108,8 @@ async fn trained_team_plays_over_the_socket_as_in_process() {
     assert!(stdout.contains("blue: goals"), "{stdout}");
 
     // The same match in process: the same networks for blue, scripted red.
-    let policies: Vec<Box<dyn Policy>> = RobotId::all()
-        .map(|robot| match robot.team() {
-            Team::Blue => naosoccer_policy::load_policy_for_match(&spec, 42).unwrap(),
-            Team::Red => PolicyKind::Scripted.build(42, robot),
-        })
-        .collect();
     let mut returns = [0.0f32; 4];
-    let out = run_to_end_with(Match::new(&match_cfg, 42).unwrap(), policies, |m, _, _| {
+    let out = trained_blue_in_process(&spec, &match_cfg, 42, |m| {
         for (ret, r) in returns.iter_mut().zip(m.rewards(Team::Blue)) {
             *ret += r;
         }
@@ -109,15 +127,7 @@ async fn trained_team_plays_over_the_socket_as_in_process() {
         )),
         "{stdout}"
     );
-    assert_eq!(end.tick, out.ticks);
-    assert_eq!(end.score.blue, out.score.blue);
-    assert_eq!(end.score.red, out.score.red);
-    assert_eq!(end.stats, out.stats, "same semantics through the socket");
-    assert_eq!(
-        end.state_hash,
-        format!("{:016x}", out.state_hash),
-        "same final state, bit for bit"
-    );
+    assert_same_match(end, &out);
     server.stop().await;
 }
 
@@ -162,6 +172,8 @@ async fn the_server_fills_empty_slots_with_a_trained_team() {
     use std::process::Stdio;
 
     let spec = format!("ppo:{}", shipped_run().display());
+    let rec_dir = std::env::temp_dir().join(format!("naosoccer-fill-rec-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&rec_dir);
     let mut server = Command::new(env!("CARGO_BIN_EXE_naosoccer"))
         .args([
             "server",
@@ -176,7 +188,8 @@ async fn the_server_fills_empty_slots_with_a_trained_team() {
             "--start-players",
             "4",
             "--exit-when-done",
-            "--no-record",
+            "--record-dir",
+            rec_dir.to_str().unwrap(),
             "--blue-token",
             BLUE,
             "--red-token",
@@ -199,6 +212,13 @@ async fn the_server_fills_empty_slots_with_a_trained_team() {
     })
     .await
     .unwrap();
+    // The match says who fills its slots: the trained team, not `fill`.
+    let mut admin = naosoccer_client::Client::connect(&addr, "admin")
+        .await
+        .unwrap();
+    let listed = admin.list_matches().await.unwrap();
+    assert_eq!(listed[0].fill_team.as_deref(), Some(spec.as_str()));
+    drop(admin);
     let red = run_team(&TeamRun {
         server: addr,
         team: Team::Red,
@@ -220,28 +240,19 @@ async fn the_server_fills_empty_slots_with_a_trained_team() {
     let end = &red[0].end;
     assert_eq!(end.reason, EndReason::Finished);
 
-    let match_cfg = naosoccer_referee::MatchConfig {
+    let match_cfg = MatchConfig {
         minutes: 0.25,
         ..Default::default()
     };
-    let policies: Vec<Box<dyn Policy>> = RobotId::all()
-        .map(|robot| match robot.team() {
-            Team::Blue => naosoccer_policy::load_policy_for_match(&spec, 9).unwrap(),
-            Team::Red => PolicyKind::Scripted.build(9, robot),
-        })
-        .collect();
-    let out = run_to_end_with(Match::new(&match_cfg, 9).unwrap(), policies, |_, _, _| {});
-    assert_eq!(end.tick, out.ticks);
+    let out = trained_blue_in_process(&spec, &match_cfg, 9, |_| {});
+    assert_same_match(end, &out);
+    let rec = naosoccer_record::Recording::read_file(&rec_dir.join("match-1-seed-9.mcap")).unwrap();
+    let players = format!("clients, empty slots {spec}");
     assert_eq!(
-        (end.score.blue, end.score.red),
-        (out.score.blue, out.score.red)
+        (rec.meta.blue.as_str(), rec.meta.red.as_str()),
+        (players.as_str(), players.as_str())
     );
-    assert_eq!(end.stats, out.stats);
-    assert_eq!(
-        end.state_hash,
-        format!("{:016x}", out.state_hash),
-        "the filled match is the in-process match, bit for bit"
-    );
+    std::fs::remove_dir_all(&rec_dir).unwrap();
 
     let out = naosoccer(&[
         "server",

@@ -1,24 +1,19 @@
-//! `--live`: a real viewer over a real WebSocket. The test speaks the
-//! Foxglove SDK's WebSocket protocol (`foxglove.sdk.v1`: JSON control
-//! messages, binary message data) to the real binary on an ephemeral
-//! loopback port.
+//! `--live`: a real viewer over a real WebSocket. The viewer
+//! (`naosoccer::live::viewer`, which `bench server --viewer` uses too)
+//! speaks the Foxglove SDK's WebSocket protocol (`foxglove.sdk.v1`: JSON
+//! control messages, binary message data) to the real binary on an
+//! ephemeral loopback port.
 
 use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Output, Stdio};
 use std::time::Duration;
 
-use futures_util::{SinkExt, StreamExt};
-use serde_json::{json, Value};
-use tokio::net::TcpStream;
-use tokio_tungstenite::tungstenite::client::IntoClientRequest;
-use tokio_tungstenite::tungstenite::Message;
-use tokio_tungstenite::WebSocketStream;
+use naosoccer::live::viewer::{scene_contents, SceneContents, Viewer};
+use serde_json::Value;
 
-type Ws = WebSocketStream<TcpStream>;
+mod common;
 
-fn naosoccer() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_naosoccer"))
-}
+use common::naosoccer_cmd as naosoccer;
 
 /// Starts `naosoccer ARGS` and reads its stderr up to the `live: ws://ADDR`
 /// line; the rest of stderr is drained on a thread.
@@ -45,84 +40,31 @@ fn spawn_live(args: &[&str]) -> (Child, String) {
     (child, addr)
 }
 
-async fn connect(addr: &str) -> Ws {
-    let mut req = format!("ws://{addr}").into_client_request().unwrap();
-    req.headers_mut()
-        .insert("sec-websocket-protocol", "foxglove.sdk.v1".parse().unwrap());
-    let tcp = TcpStream::connect(addr).await.unwrap();
-    let (ws, resp) = tokio_tungstenite::client_async(req, tcp).await.unwrap();
-    assert_eq!(
-        resp.headers()["sec-websocket-protocol"],
-        "foxglove.sdk.v1",
-        "the server speaks the Foxglove SDK subprotocol"
-    );
-    ws
+/// A viewer of match 1 (it speaks the SDK's subprotocol, or this fails)
+/// and the match's channels once all are advertised, by topic.
+async fn watch(addr: &str) -> (Viewer, std::collections::BTreeMap<String, Value>) {
+    let mut v = Viewer::connect(addr).await.unwrap();
+    let ch = v.advertised(1).await.unwrap();
+    (v, ch)
 }
 
-/// Reads control messages until every topic in `want` is advertised;
-/// returns the advertised channels by topic.
-async fn advertised(ws: &mut Ws, want: &[&str]) -> std::collections::BTreeMap<String, Value> {
-    // A match's channels are created one after the other, and the SDK may
-    // advertise one a moment before it takes subscriptions for it: wait for
-    // the whole set (the log channel is created last).
-    let all = ["scene", "tf", "state", "score", "events", "stats", "log"]
-        .map(|t| format!("/match/1/{t}"));
-    let mut channels = std::collections::BTreeMap::new();
-    while !want.iter().all(|t| channels.contains_key(*t))
-        || !all.iter().all(|t| channels.contains_key(t))
-    {
-        let msg = ws.next().await.expect("open").expect("a message");
-        if let Message::Text(t) = msg {
-            let v: Value = serde_json::from_str(&t).unwrap();
-            if v["op"] == "advertise" {
-                for c in v["channels"].as_array().unwrap() {
-                    channels.insert(c["topic"].as_str().unwrap().to_string(), c.clone());
-                }
-            }
-        }
-    }
-    channels
-}
-
-async fn subscribe(ws: &mut Ws, channels: &[(u32, &Value)]) {
-    let subs: Vec<Value> = channels
-        .iter()
-        .map(|(sub, c)| json!({"id": sub, "channelId": c["id"]}))
-        .collect();
-    let msg = json!({"op": "subscribe", "subscriptions": subs});
-    ws.send(Message::Text(msg.to_string().into()))
-        .await
-        .unwrap();
-}
-
-/// The next message data frame: (subscription id, payload as JSON).
-async fn next_data(ws: &mut Ws) -> Option<(u32, Value)> {
-    loop {
-        match ws.next().await? {
-            Ok(Message::Binary(b)) => {
-                assert_eq!(b[0], 1, "opcode 1: message data");
-                let sub = u32::from_le_bytes(b[1..5].try_into().unwrap());
-                let v = serde_json::from_slice(&b[13..]).expect("JSON payload");
-                return Some((sub, v));
-            }
-            Ok(_) => continue,
-            Err(_) => return None,
-        }
-    }
-}
-
-fn final_hash(child: Child) -> String {
-    let out = child.wait_with_output().unwrap();
+/// The final state hash a successful `match --json` run printed.
+fn state_hash(out: Output) -> String {
     assert!(out.status.success());
     let v: Value = serde_json::from_slice(&out.stdout).expect("--json output");
     v["state_hash"].as_str().unwrap().to_string()
 }
 
 fn unwatched_hash(args: &[&str]) -> String {
-    let out = naosoccer().args(args).output().unwrap();
-    assert!(out.status.success());
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
-    v["state_hash"].as_str().unwrap().to_string()
+    state_hash(naosoccer().args(args).output().unwrap())
+}
+
+/// A scene with the whole pitch's players: 8 robots and the ball.
+fn assert_full_scene(v: &Value) -> SceneContents {
+    let c = scene_contents(v);
+    assert_eq!(c.robots, 8, "{v}");
+    assert!(c.ball && c.scoreboard, "{v}");
+    c
 }
 
 /// A viewer sees the scene advertised as foxglove.SceneUpdate, subscribes,
@@ -134,35 +76,20 @@ async fn match_live_streams_the_scene_and_changes_nothing() {
     let mut args = base.to_vec();
     args.extend(["--live", "127.0.0.1:0", "--speed", "10", "--wait-viewer"]);
     let (child, addr) = spawn_live(&args);
-    let mut ws = connect(&addr).await;
-    let ch = advertised(
-        &mut ws,
-        &["/match/1/scene", "/match/1/state", "/match/1/tf"],
-    )
-    .await;
+    let (mut ws, ch) = watch(&addr).await;
     let scene = &ch["/match/1/scene"];
     assert_eq!(scene["schemaName"], "foxglove.SceneUpdate");
     assert_eq!(scene["encoding"], "json");
     assert_eq!(ch["/match/1/tf"]["schemaName"], "foxglove.FrameTransforms");
-    subscribe(&mut ws, &[(1, scene), (2, &ch["/match/1/state"])]).await;
+    ws.subscribe(&[(1, scene), (2, &ch["/match/1/state"])])
+        .await
+        .unwrap();
 
     let (mut scenes, mut pitches, mut ticks) = (0, 0, Vec::new());
-    while let Some((sub, v)) = next_data(&mut ws).await {
+    while let Some((sub, v)) = ws.next_data().await {
         // Scenes come before the state of the same tick.
         if sub == 1 {
-            let ids: Vec<&str> = v["entities"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|e| e["id"].as_str().unwrap())
-                .collect();
-            let robots = ids.iter().filter(|i| i.starts_with("robot_")).count();
-            assert_eq!(robots, 8, "{ids:?}");
-            assert!(
-                ids.contains(&"ball") && ids.contains(&"scoreboard"),
-                "{ids:?}"
-            );
-            pitches += ids.contains(&"pitch") as u32;
+            pitches += assert_full_scene(&v).pitch as u32;
             scenes += 1;
         } else {
             ticks.push(v["tick"].as_u64().unwrap());
@@ -173,12 +100,15 @@ async fn match_live_streams_the_scene_and_changes_nothing() {
         }
     }
     // The server keeps serving until its viewers leave (or 5 s pass).
-    ws.close(None).await.unwrap();
+    ws.close().await;
     // Kick-off and 300 ticks, every one in order; the pitch once a second.
     assert_eq!(ticks, (0..=300).collect::<Vec<_>>());
     assert_eq!(scenes, 301);
     assert_eq!(pitches, 31);
-    assert_eq!(final_hash(child), unwatched_hash(&base));
+    assert_eq!(
+        state_hash(child.wait_with_output().unwrap()),
+        unwatched_hash(&base)
+    );
 }
 
 /// A viewer that subscribes to everything and then stops reading neither
@@ -192,12 +122,11 @@ async fn a_stalled_viewer_changes_nothing() {
     let mut args = base.to_vec();
     args.extend(["--live", "127.0.0.1:0", "--speed", "10000", "--wait-viewer"]);
     let (child, addr) = spawn_live(&args);
-    let mut ws = connect(&addr).await;
-    let ch = advertised(&mut ws, &["/match/1/scene"]).await;
+    let (mut ws, ch) = watch(&addr).await;
     let all: Vec<(u32, &Value)> = ch.values().zip(1..).map(|(c, i)| (i, c)).collect();
-    subscribe(&mut ws, &all).await;
+    ws.subscribe(&all).await.unwrap();
     // Stop reading; the match must still end by itself.
-    let hash = tokio::task::spawn_blocking(move || final_hash(child));
+    let hash = tokio::task::spawn_blocking(move || state_hash(child.wait_with_output().unwrap()));
     let hash = tokio::time::timeout(Duration::from_secs(120), hash)
         .await
         .expect("the match ends although its viewer stalls")
@@ -240,30 +169,18 @@ async fn replay_live_streams_every_tick_in_order() {
         "--wait-viewer",
     ];
     let (child, addr) = spawn_live(&args);
-    let mut ws = connect(&addr).await;
-    let ch = advertised(
-        &mut ws,
-        &[
-            "/match/1/scene",
-            "/match/1/state",
-            "/match/1/events",
-            "/match/1/log",
-        ],
-    )
-    .await;
+    let (mut ws, ch) = watch(&addr).await;
     assert_eq!(ch["/match/1/log"]["schemaName"], "foxglove.Log");
-    subscribe(
-        &mut ws,
-        &[
-            (1, &ch["/match/1/scene"]),
-            (2, &ch["/match/1/state"]),
-            (3, &ch["/match/1/events"]),
-            (4, &ch["/match/1/log"]),
-        ],
-    )
-    .await;
+    ws.subscribe(&[
+        (1, &ch["/match/1/scene"]),
+        (2, &ch["/match/1/state"]),
+        (3, &ch["/match/1/events"]),
+        (4, &ch["/match/1/log"]),
+    ])
+    .await
+    .unwrap();
     let (mut ticks, mut events, mut scenes, mut logs) = (Vec::new(), 0, 0, 0);
-    while let Some((sub, v)) = next_data(&mut ws).await {
+    while let Some((sub, v)) = ws.next_data().await {
         match sub {
             1 => scenes += 1,
             2 => {
@@ -282,7 +199,7 @@ async fn replay_live_streams_every_tick_in_order() {
             }
         }
     }
-    ws.close(None).await.unwrap();
+    ws.close().await;
     assert_eq!(ticks, (0..=180).collect::<Vec<_>>());
     assert_eq!(scenes, 181);
     assert_eq!(events, recorded_events);
@@ -328,23 +245,15 @@ async fn server_live_streams_a_running_match_and_changes_nothing() {
     args.extend(["--live".into(), "127.0.0.1:0".into()]);
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let (child, addr) = spawn_live(&args);
-    let mut ws = connect(&addr).await;
-    let ch = advertised(&mut ws, &["/match/1/scene", "/match/1/state"]).await;
+    let (mut ws, ch) = watch(&addr).await;
     assert_eq!(ch["/match/1/scene"]["schemaName"], "foxglove.SceneUpdate");
-    subscribe(
-        &mut ws,
-        &[(1, &ch["/match/1/scene"]), (2, &ch["/match/1/state"])],
-    )
-    .await;
+    ws.subscribe(&[(1, &ch["/match/1/scene"]), (2, &ch["/match/1/state"])])
+        .await
+        .unwrap();
     let (mut scenes, mut ticks) = (0, Vec::<u64>::new());
-    while let Some((sub, v)) = next_data(&mut ws).await {
+    while let Some((sub, v)) = ws.next_data().await {
         if sub == 1 {
-            let e = v["entities"].as_array().unwrap();
-            let robots = e
-                .iter()
-                .filter(|e| e["id"].as_str().unwrap().starts_with("robot_"));
-            assert_eq!(robots.count(), 8);
-            assert!(e.iter().any(|e| e["id"] == "ball"));
+            assert_full_scene(&v);
             scenes += 1;
         } else {
             ticks.push(v["tick"].as_u64().unwrap());

@@ -1,13 +1,8 @@
 //! `naosoccer match` end to end: the real binary, its JSON and its table.
 
-use std::process::Command;
+mod common;
 
-fn naosoccer(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_naosoccer"))
-        .args(args)
-        .output()
-        .expect("run naosoccer")
-}
+use common::naosoccer;
 
 #[test]
 fn json_is_one_object_with_the_documented_fields() {

@@ -5,13 +5,12 @@
 //! framing by hand and reads messages into its own 1.1 types, so nothing of
 //! this build's protocol crate helps it along.
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
+use common::server::*;
 use naosoccer_client::PolicyKind;
 use serde::Deserialize;
 use serde_json::{json, Value};
-use support::*;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
 

@@ -1,33 +1,13 @@
 //! `naosoccer match --record`, `replay` and `render` as a user runs them:
 //! the real binary, real files.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn naosoccer(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_naosoccer"))
-        .args(args)
-        .output()
-        .expect("run naosoccer")
-}
-
-fn text(out: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("naosoccer-record-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+use common::{naosoccer, scratch, text};
 
 #[test]
 fn record_replay_summary_render_and_a_cut_file() {
-    let file = scratch("m.mcap");
+    let file = scratch("record-cli", "m.mcap");
     let f = file.to_str().unwrap();
     let out = naosoccer(&[
         "match",
@@ -63,7 +43,7 @@ fn record_replay_summary_render_and_a_cut_file() {
     );
     assert!(s.contains(&score), "{s}");
 
-    let png = scratch("m.png");
+    let png = scratch("record-cli", "m.png");
     let out = naosoccer(&["render", f, "--out", png.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out));
     let bytes = std::fs::read(&png).unwrap();
@@ -71,7 +51,7 @@ fn record_replay_summary_render_and_a_cut_file() {
 
     // A server killed mid-match leaves a prefix of the file.
     let all = std::fs::read(&file).unwrap();
-    let cut = scratch("cut.mcap");
+    let cut = scratch("record-cli", "cut.mcap");
     std::fs::write(&cut, &all[..all.len() / 2]).unwrap();
     let out = naosoccer(&["replay", cut.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "{}", text(&out));
@@ -81,7 +61,7 @@ fn record_replay_summary_render_and_a_cut_file() {
         "{s}"
     );
 
-    let junk = scratch("junk.mcap");
+    let junk = scratch("record-cli", "junk.mcap");
     std::fs::write(&junk, b"definitely not mcap").unwrap();
     let out = naosoccer(&["replay", junk.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(3), "{}", text(&out));

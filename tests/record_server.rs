@@ -1,15 +1,14 @@
 //! A match played through the server in lockstep is recorded to MCAP and
 //! the recording replays identically, with the statistics the clients saw.
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
+use common::server::*;
 use naosoccer_client::robot::{run_team, TeamRun};
 use naosoccer_client::PolicyKind;
 use naosoccer_proto::msg::{EndReason, MatchId, Player};
 use naosoccer_proto::Team;
 use naosoccer_record::{replay, Recording, ReplayOutcome};
-use support::*;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn server_match_is_recorded_and_replays_identically() {

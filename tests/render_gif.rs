@@ -1,29 +1,11 @@
 //! `naosoccer render FILE --gif OUT.gif` as a user runs it: a real match
 //! recorded to MCAP, drawn as a GIF, decoded back frame by frame.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn naosoccer(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_naosoccer"))
-        .args(args)
-        .output()
-        .expect("run naosoccer")
-}
+use common::{naosoccer, scratch, text};
 
-fn text(out: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("naosoccer-render-gif-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+use std::path::Path;
 
 /// The GIF's size and every frame as the viewer shows it (palette indices,
 /// each frame drawn over the ones before).
@@ -53,14 +35,14 @@ fn decode(path: &Path) -> (u16, u16, Vec<Vec<u8>>) {
 
 #[test]
 fn a_recorded_match_as_an_animated_gif() {
-    let file = scratch("m.mcap");
+    let file = scratch("render-gif", "m.mcap");
     let f = file.to_str().unwrap();
     let out = naosoccer(&["match", "--seed", "3", "--minutes", "0.5", "--record", f]);
     assert!(out.status.success(), "{}", text(&out));
 
     // 300 ticks at 10 Hz; 5 game s per GIF s at 4 fps: every 12.5 -> 13 ticks,
     // ticks 0, 13, ..., 299: 24 frames.
-    let gif_path = scratch("m.gif");
+    let gif_path = scratch("render-gif", "m.gif");
     let g = gif_path.to_str().unwrap();
     let args = [
         "render", f, "--gif", g, "--speed", "5", "--fps", "4", "--width", "320",
@@ -84,7 +66,7 @@ fn a_recorded_match_as_an_animated_gif() {
     assert_ne!(frames[0], frames[1]);
 
     // The same recording and options give the same bytes.
-    let again = scratch("again.gif");
+    let again = scratch("render-gif", "again.gif");
     let mut args2 = args;
     args2[3] = again.to_str().unwrap();
     assert!(naosoccer(&args2).status.success());
@@ -95,8 +77,8 @@ fn a_recorded_match_as_an_animated_gif() {
 
     // A part of the match, and the PNG still alongside: 10 s to 20 s at the
     // defaults (10 game s per s, 10 fps: every 10th tick) is 11 frames.
-    let part = scratch("part.gif");
-    let png = scratch("m.png");
+    let part = scratch("render-gif", "part.gif");
+    let png = scratch("render-gif", "m.png");
     let out = naosoccer(&[
         "render",
         f,

@@ -1,14 +1,13 @@
 //! End to end over TCP: a real server on an ephemeral port, real clients,
 //! real matches; results compared with the same match played in process.
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
+use common::server::*;
 use naosoccer_client::robot::{run_team, TeamRun};
 use naosoccer_client::{Client, PolicyKind, Push};
 use naosoccer_proto::msg::{EndReason, ErrorCode, MatchId, Player, PlayerAction, Score};
 use naosoccer_proto::{Action, Team, PLAYERS_PER_TEAM};
-use support::*;
 
 fn all_players() -> Vec<Player> {
     Player::all().collect()

@@ -1,9 +1,9 @@
 //! Misbehaving clients get the documented error, and the server keeps
 //! serving everyone else.
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
+use common::server::*;
 use naosoccer_client::{Client, ClientError};
 use naosoccer_proto::frame;
 use naosoccer_proto::msg::{
@@ -11,7 +11,6 @@ use naosoccer_proto::msg::{
     Player, PlayerAction, ServerMsg, Version,
 };
 use naosoccer_proto::{Action, Team};
-use support::*;
 use tokio::net::TcpStream;
 
 fn p(n: usize) -> Player {

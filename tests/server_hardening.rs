@@ -4,9 +4,9 @@
 //! match ends alone. All on 127.0.0.1; waits are on events or tokio's paused
 //! clock, never on sleeps.
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
+use common::server::*;
 use naosoccer_client::{Client, ClientError, Push};
 use naosoccer_proto::msg::{
     ClientMsg, CreateMatch, EndReason, ErrorCode, ErrorMsg, Hello, MatchEnd, MatchId, MatchInfo,
@@ -17,7 +17,6 @@ use naosoccer_referee::Match;
 use naosoccer_server::{Hooks, MatchObserver, ServerConfig, ServerError, TickRecord};
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
-use support::*;
 use tokio::net::{TcpListener, TcpSocket, TcpStream};
 use tokio::sync::oneshot;
 
@@ -571,6 +570,11 @@ async fn a_panicking_match_ends_alone() {
     assert_eq!(a_end.tick, 20, "ticks 0..20 played, 20 panicked");
     assert_eq!(a_errors.len(), 1, "{a_errors:?}");
     assert_eq!(a_errors[0].code, ErrorCode::Internal);
+    assert_eq!(
+        (a_errors[0].in_reply_to.as_deref(), a_errors[0].tick),
+        (Some("action"), Some(20)),
+        "the error is paired with the actions for the tick that failed"
+    );
     assert_eq!(b_end.reason, EndReason::Finished);
     assert_eq!(b_end.tick, 60);
     assert!(b_errors.is_empty(), "{b_errors:?}");

@@ -3,16 +3,15 @@
 //! the connection, never panics; a lockstep match on another connection
 //! keeps ticking throughout (issue 6).
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
+use common::server::*;
 use naosoccer_client::{Client, Push};
 use naosoccer_proto::msg::{MatchId, Player, PlayerAction, ServerMsg};
 use naosoccer_proto::{frame, Action, Team};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use std::time::Duration;
-use support::*;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
 use tokio::sync::watch;

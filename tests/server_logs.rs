@@ -5,14 +5,13 @@
 //! call sites as disabled, and the capture then missed lines (two runs in
 //! ten under load).
 
-#[path = "server_support.rs"]
-mod support;
+mod common;
 
+use common::server::*;
 use naosoccer_client::{Client, Push};
 use naosoccer_proto::msg::{ActionMsg, ClientMsg, CreateMatch, EndReason, ErrorCode, MatchId};
 use naosoccer_proto::Team;
 use std::sync::{Arc, Mutex};
-use support::*;
 
 /// Team tokens are bound to their team and cannot create matches; no token
 /// (right or guessed) appears in any error message or log line.

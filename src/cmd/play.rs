@@ -12,7 +12,7 @@ use naosoccer_client::PolicyKind;
 use naosoccer_proto::{Action, Event, RobotId, Team, TeamStats, ROBOTS};
 
 use super::team::TeamSpec;
-use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RecordingSummary, StateRecord};
+use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RecordingSummary};
 use naosoccer_referee::{Match, MatchConfig};
 use naosoccer_sim::{BareWorld, RobotModel};
 
@@ -122,7 +122,7 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
             // About once a game minute; enough to see it move, cheap to print.
             if show_progress && (m.tick() - last_shown >= 600 || m.is_finished()) {
                 last_shown = m.tick();
-                let (b, r) = m.score();
+                let naosoccer_proto::PerTeam { blue: b, red: r } = m.score();
                 let mut err = std::io::stderr().lock();
                 let _ = write!(
                     err,
@@ -179,7 +179,7 @@ impl LiveMatch {
         if args.wait_viewer && !server.wait_for_viewer(Duration::from_secs(600)) {
             anyhow::bail!("no viewer subscribed within 10 minutes");
         }
-        stream.tick(&StateRecord::of(&m), &[], Some(&m.stats()));
+        stream.tick_of(&m, &[], true);
         Ok(LiveMatch {
             server,
             stream,
@@ -189,9 +189,8 @@ impl LiveMatch {
 
     fn tick(&mut self, m: &Match, events: &[Event]) {
         if self.stream.watched() {
-            let stats = (m.tick().is_multiple_of(10) || m.is_finished()).then(|| m.stats());
-            self.stream
-                .tick(&StateRecord::of(m), events, stats.as_ref());
+            let with_stats = m.tick().is_multiple_of(10) || m.is_finished();
+            self.stream.tick_of(m, events, with_stats);
         }
         self.pace.wait(m.tick());
     }

@@ -163,7 +163,7 @@ fn stream_recording(rec: &Recording, addr: &str, args: &ReplayArgs) -> anyhow::R
     let first = rec.states.first().map_or(0, |s| s.tick);
     for (i, state) in rec.states.iter().enumerate() {
         due.clear();
-        while let Some(e) = events.next_if(|e| e.tick() <= state.tick) {
+        while let Some(e) = events.next_if(|e| e.tick().is_none_or(|t| t <= state.tick)) {
             due.push(e.clone());
         }
         let last = i + 1 == rec.states.len();

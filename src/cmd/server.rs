@@ -2,7 +2,7 @@
 use anyhow::Context;
 use clap::Args;
 use naosoccer_proto::msg::{Fill, Mode};
-use naosoccer_server::{Hooks, MatchObserver, ServerConfig, TickRecord};
+use naosoccer_server::{FillTeam, Hooks, MatchObserver, ServerConfig, TickRecord};
 use std::path::PathBuf;
 use std::sync::Arc;
 use tokio::net::TcpListener;
@@ -191,10 +191,11 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
     // A trained fill team is loaded once, here, so a bad spec fails at start;
     // every match gets a copy (its draws keyed by that match's seed).
     let learned_fill = match args.fill.as_deref() {
-        Some(f) if naosoccer_policy::is_learned_spec(f) => Some(
+        Some(f) if naosoccer_policy::is_learned_spec(f) => Some((
+            f.to_string(),
             naosoccer_policy::LearnedPolicy::load(f)
                 .with_context(|| format!("loading --fill {f}"))?,
-        ),
+        )),
         _ => None,
     };
     let tokens = cfg.resolve_tokens();
@@ -229,12 +230,15 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
         }
         let (all_done_tx, all_done) = tokio::sync::watch::channel(false);
         let mut hooks = Hooks::default();
-        if let Some(team) = learned_fill {
-            hooks.fill = Some(Arc::new(move |seed, _robot| {
-                let mut p = team.clone();
-                p.set_match_seed(seed);
-                Box::new(p) as Box<dyn naosoccer_client::Policy>
-            }));
+        if let Some((spec, team)) = learned_fill {
+            hooks.fill = Some(FillTeam {
+                spec,
+                make: Arc::new(move |seed, _robot| {
+                    let mut p = team.clone();
+                    p.set_match_seed(seed);
+                    Box::new(p) as Box<dyn naosoccer_client::Policy>
+                }),
+            });
         }
         if args.exit_when_done {
             hooks.observer = Some(Arc::new(done_counter(cfg.matches, all_done_tx)));
@@ -354,6 +358,16 @@ pub struct BenchServerArgs {
         value_name = "single|concurrent|realtime"
     )]
     pub parts: Vec<String>,
+    /// Also play the single lockstep match with `--live` on and a Foxglove
+    /// viewer connected that subscribes to all its channels (the scene
+    /// among them) and reads everything, alternating with unwatched rounds
+    /// (`--viewer-rounds` of each), and print every round's figures and
+    /// the slowdown of the medians.
+    #[arg(long)]
+    pub viewer: bool,
+    /// Rounds of each, unwatched and watched, with `--viewer`.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub viewer_rounds: u32,
 }
 
 struct Latencies(std::sync::Mutex<Vec<std::time::Duration>>);
@@ -371,12 +385,67 @@ impl MatchObserver for LatencyObserver {
     fn on_end(&mut self, _: &naosoccer_proto::msg::MatchEnd, _: &naosoccer_referee::Match) {}
 }
 
+/// What the bench's viewer received.
+#[derive(Debug, Default)]
+struct Watched {
+    messages: u64,
+    scenes: u64,
+    bytes: u64,
+}
+
+/// A Foxglove viewer of `live`'s match 1, subscribed to all its channels,
+/// reading until `stop`.
+async fn bench_viewer(
+    addr: String,
+    stop: tokio::sync::oneshot::Receiver<()>,
+) -> anyhow::Result<Watched> {
+    use naosoccer::live::viewer::Viewer;
+    let mut v = Viewer::connect(&addr).await?;
+    let ch = v.advertised(1).await?;
+    let scene_id = 1;
+    let subs: Vec<(u32, &serde_json::Value)> =
+        ch.values().zip(scene_id..).map(|(c, i)| (i, c)).collect();
+    let scene_sub = subs
+        .iter()
+        .find(|(_, c)| c["topic"] == "/match/1/scene")
+        .map(|(i, _)| *i);
+    v.subscribe(&subs).await?;
+    let mut w = Watched::default();
+    tokio::pin!(stop);
+    loop {
+        tokio::select! {
+            m = v.next_raw() => match m {
+                Some((sub, b)) => {
+                    w.messages += 1;
+                    w.bytes += b.len() as u64;
+                    w.scenes += u64::from(Some(sub) == scene_sub);
+                }
+                None => break,
+            },
+            _ = &mut stop => break,
+        }
+    }
+    v.close().await;
+    Ok(w)
+}
+
 /// Plays `cfg.matches` matches with 8 robot clients each on a fresh server;
 /// returns (wall time, ticks played, client errors, missed robot-ticks).
+/// With `live`, the server streams its matches there (`--live`) and a
+/// viewer watches match 1 from before the clients join.
 async fn bench_round(
-    mut cfg: ServerConfig,
+    cfg: ServerConfig,
     hooks: Hooks,
 ) -> anyhow::Result<(std::time::Duration, u64, usize, u64)> {
+    let (el, ticks, errors, misses, _) = bench_round_watched(cfg, hooks, None).await?;
+    Ok((el, ticks, errors, misses))
+}
+
+async fn bench_round_watched(
+    mut cfg: ServerConfig,
+    mut hooks: Hooks,
+    live: Option<Arc<naosoccer::live::LiveServer>>,
+) -> anyhow::Result<(std::time::Duration, u64, usize, u64, Watched)> {
     use naosoccer_client::robot::{run_team, TeamRun};
     use naosoccer_client::PolicyKind;
     use naosoccer_proto::msg::{MatchId, Player};
@@ -388,6 +457,9 @@ async fn bench_round(
     let addr = listener.local_addr()?.to_string();
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let matches = cfg.matches;
+    if let Some(live) = &live {
+        hooks.observer = Some(Arc::new(with_live(hooks.observer.take(), live.clone())));
+    }
     let server = tokio::spawn(naosoccer_server::run_with(
         listener,
         cfg,
@@ -396,6 +468,20 @@ async fn bench_round(
             let _ = stop_rx.await;
         },
     ));
+    let (viewer_stop, viewer) = match &live {
+        Some(live) => {
+            let (tx, rx) = tokio::sync::oneshot::channel();
+            let task = tokio::spawn(bench_viewer(live.addr().to_string(), rx));
+            let l = live.clone();
+            let subscribed = tokio::task::spawn_blocking(move || {
+                l.wait_for_viewer(std::time::Duration::from_secs(30))
+            })
+            .await?;
+            anyhow::ensure!(subscribed, "the bench viewer did not subscribe within 30 s");
+            (Some(tx), Some(task))
+        }
+        None => (None, None),
+    };
     let start = std::time::Instant::now();
     let mut clients = Vec::new();
     for id in 1..=matches {
@@ -441,15 +527,33 @@ async fn bench_round(
     let elapsed = start.elapsed();
     let _ = stop_tx.send(());
     server.await??;
-    Ok((elapsed, ticks, errors, misses))
+    if let Some(tx) = viewer_stop {
+        let _ = tx.send(());
+    }
+    let watched = match viewer {
+        Some(task) => task.await??,
+        None => Watched::default(),
+    };
+    Ok((elapsed, ticks, errors, misses, watched))
 }
 
 pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
     init_logging();
+    // Before the bench's runtime: the SDK runs its own (and is stopped
+    // outside this one, when the last reference, this one, goes).
+    // One live server per watched round (each counts its own viewer).
+    let mut lives = Vec::new();
+    if args.viewer && args.parts.iter().any(|p| p == "single") {
+        for _ in 0..args.viewer_rounds {
+            lives.push(Arc::new(naosoccer::live::LiveServer::start("127.0.0.1:0")?));
+        }
+    }
     let rt = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()?;
-    rt.block_on(async move {
+    let lives_ref = lives.clone();
+    let res = rt.block_on(async move {
+        let lives = lives_ref;
         let mut base = ServerConfig { mode: Mode::Lockstep, ..ServerConfig::default() };
         base.match_cfg.minutes = args.minutes;
         // Every bench client connects from 127.0.0.1: lift the per-address
@@ -470,11 +574,49 @@ pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
         );
 
         let (el, ticks, errors, misses) = bench_round(base.clone(), Hooks::default()).await?;
+        let unwatched = ticks as f64 / el.as_secs_f64();
         println!(
-            "1 lockstep match, 8 robot clients: {ticks} ticks in {:.2} s = {:.0} ticks/s (errors {errors}, missed robot-ticks {misses})",
+            "1 lockstep match, 8 robot clients: {ticks} ticks in {:.2} s = {unwatched:.0} ticks/s (errors {errors}, missed robot-ticks {misses})",
             el.as_secs_f64(),
-            ticks as f64 / el.as_secs_f64()
         );
+        if !lives.is_empty() {
+            // Unwatched and watched rounds alternate, so a machine whose
+            // load drifts weighs on both alike; medians compared.
+            let (mut plain, mut watched) = (vec![unwatched], Vec::new());
+            for (i, live) in lives.iter().enumerate() {
+                if i > 0 {
+                    let (el, ticks, errors, misses) = bench_round(base.clone(), Hooks::default()).await?;
+                    plain.push(ticks as f64 / el.as_secs_f64());
+                    println!(
+                        "1 lockstep match, 8 robot clients: {ticks} ticks in {:.2} s = {:.0} ticks/s (errors {errors}, missed robot-ticks {misses})",
+                        el.as_secs_f64(),
+                        plain[i],
+                    );
+                }
+                let (el, ticks, errors, misses, w) =
+                    bench_round_watched(base.clone(), Hooks::default(), Some(live.clone())).await?;
+                watched.push(ticks as f64 / el.as_secs_f64());
+                println!(
+                    "the same match, --live with 1 viewer subscribed to every channel: {ticks} ticks in {:.2} s = {:.0} ticks/s (errors {errors}, missed robot-ticks {misses}); the viewer got {} messages, {} scenes, {:.0} kB ({:.0} kB/s)",
+                    el.as_secs_f64(),
+                    watched[i],
+                    w.messages,
+                    w.scenes,
+                    w.bytes as f64 / 1e3,
+                    w.bytes as f64 / 1e3 / el.as_secs_f64(),
+                );
+            }
+            let median = |v: &mut Vec<f64>| {
+                v.sort_by(f64::total_cmp);
+                v[v.len() / 2]
+            };
+            let (p, w) = (median(&mut plain), median(&mut watched));
+            println!(
+                "a viewer slows the lockstep match by {:.1}% (medians of {} rounds each: {p:.0} unwatched, {w:.0} watched ticks/s; target <= 10%)",
+                (1.0 - w / p) * 100.0,
+                lives.len(),
+            );
+        }
         }
 
         if run("concurrent") {
@@ -519,7 +661,10 @@ pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
         );
         }
         Ok(())
-    })
+    });
+    drop(rt);
+    drop(lives);
+    res
 }
 
 fn in_process_ticks(cfg: &naosoccer_referee::MatchConfig, seed: u64) -> anyhow::Result<u64> {

@@ -17,7 +17,7 @@ const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"]
 
 fn state(base: &Observation, player: usize, me: (f32, f32, f32), ball: (f32, f32)) -> Observation {
     let mut o = base.clone();
-    o.player = player as u8;
+    o.player = naosoccer_proto::Player::new(player).unwrap();
     o.own[player].x = me.0;
     o.own[player].y = me.1;
     o.own[player].heading = me.2;

@@ -47,6 +47,54 @@ fn kind(o: &Observation, in_reach: bool) -> usize {
     }
 }
 
+/// Whether a teammate of the robot that received `o` stands where a kick
+/// now would reach it: 1-3 m ahead, within 15 degrees of the heading, with no
+/// standing opponent within 0.3 m of the line from the ball to it.
+fn pass_on(o: &Observation) -> bool {
+    let me = o.me();
+    let (s, c) = me.heading.sin_cos();
+    let mine = o.player as usize % PLAYERS_PER_TEAM;
+    o.own.iter().enumerate().any(|(p, m)| {
+        if p == mine || m.fallen {
+            return false;
+        }
+        let (dx, dy) = (m.x - me.x, m.y - me.y);
+        let (ahead, side) = (c * dx + s * dy, -s * dx + c * dy);
+        let d = ahead.hypot(side);
+        let open = o.opponents.iter().filter(|q| !q.fallen).all(|q| {
+            let (ux, uy) = (m.x - o.ball.x, m.y - o.ball.y);
+            let (vx, vy) = (q.x - o.ball.x, q.y - o.ball.y);
+            let t = ((ux * vx + uy * vy) / (ux * ux + uy * uy).max(1e-9)).clamp(0.0, 1.0);
+            (vx - t * ux).hypot(vy - t * uy) > 0.3
+        });
+        (1.0..=3.0).contains(&d) && side.atan2(ahead).abs() <= 15f32.to_radians() && open
+    })
+}
+
+/// For the robot that received `o` with the ball in reach: whether some
+/// standing teammate is 1-4 m away within 15, 30 and 45 degrees of its heading.
+fn mate_cones(o: &Observation) -> [bool; 3] {
+    let me = o.me();
+    let (s, c) = me.heading.sin_cos();
+    let mine = o.player as usize % PLAYERS_PER_TEAM;
+    let mut hit = [false; 3];
+    for (p, m) in o.own.iter().enumerate() {
+        if p == mine || m.fallen {
+            continue;
+        }
+        let (dx, dy) = (m.x - me.x, m.y - me.y);
+        let (ahead, side) = (c * dx + s * dy, -s * dx + c * dy);
+        if !(1.0..=4.0).contains(&ahead.hypot(side)) {
+            continue;
+        }
+        let bearing = side.atan2(ahead).abs().to_degrees();
+        for (k, limit) in [15.0, 30.0, 45.0].into_iter().enumerate() {
+            hit[k] |= bearing <= limit;
+        }
+    }
+    hit
+}
+
 fn main() {
     let mut args = std::env::args().skip(1);
     let spec = args
@@ -59,6 +107,9 @@ fn main() {
     let scale = team.scale();
     let cfg = MatchConfig::default();
     let mut counts = [[0u64; NAMES.len()]; KINDS.len()];
+    // Ball in kick reach with a teammate open where the kick would go.
+    let mut pass_counts = [0u64; NAMES.len()];
+    let (mut reach_ticks, mut cone_ticks) = (0u64, [0u64; 3]);
     for seed in 0..matches {
         let mut m = Match::new(&cfg, 1_000_000 + seed).expect("a match");
         team.set_match_seed(m.seed());
@@ -75,7 +126,17 @@ fn main() {
                 // Free robots only: a lying or kicking robot's action does
                 // nothing. A movement held for a few ticks counts each tick.
                 if is_free(o) {
-                    counts[kind(o, scale.kick.in_reach(o))][acts[p].index()] += 1;
+                    let in_reach = scale.kick.in_reach(o);
+                    counts[kind(o, in_reach)][acts[p].index()] += 1;
+                    if in_reach && pass_on(o) {
+                        pass_counts[acts[p].index()] += 1;
+                    }
+                    if in_reach {
+                        reach_ticks += 1;
+                        for (t, h) in cone_ticks.iter_mut().zip(mate_cones(o)) {
+                            *t += u64::from(h);
+                        }
+                    }
                 }
             }
             for (i, red) in reds.iter_mut().enumerate() {
@@ -95,4 +156,22 @@ fn main() {
             .collect();
         println!("  {} ({n} ticks): {}", KINDS[k], shares.join(", "));
     }
+    let n: u64 = pass_counts.iter().sum();
+    let shares: Vec<String> = pass_counts
+        .iter()
+        .zip(NAMES)
+        .map(|(c, name)| format!("{name} {:.2}", *c as f64 / n.max(1) as f64))
+        .collect();
+    println!(
+        "  ball in kick reach, a teammate open 1-3 m ahead (+-15 deg) ({n} ticks): {}",
+        shares.join(", ")
+    );
+    let share = |k: usize| cone_ticks[k] as f64 / reach_ticks.max(1) as f64;
+    println!(
+        "  of {reach_ticks} ticks with the ball in reach, a standing teammate 1-4 m away within \
+         15 / 30 / 45 deg of the heading: {:.2} / {:.2} / {:.2}",
+        share(0),
+        share(1),
+        share(2)
+    );
 }

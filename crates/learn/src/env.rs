@@ -585,7 +585,7 @@ impl Slot {
     }
 
     fn restart(&mut self, cfg: &MatchConfig, env: &EnvConfig, mix: &Mix) -> Result<(), LearnError> {
-        let (blue, red) = self.m.score();
+        let naosoccer_proto::PerTeam { blue, red } = self.m.score();
         let (gf, ga) = if self.team == Team::Blue {
             (blue, red)
         } else {

@@ -2,36 +2,21 @@
 
 use std::path::PathBuf;
 
+use naosoccer_policy::PolicyError;
+
 /// Why training, loading or evaluating failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum LearnError {
     #[error("match: {0}")]
     Match(#[from] naosoccer_referee::MatchError),
+    /// Loading or saving files (I/O, JSON, policy specs, observation
+    /// layouts, weights): the policy crate's errors, shared rather than
+    /// repeated here.
     #[error("{0}")]
-    Policy(#[from] naosoccer_policy::PolicyError),
+    Policy(#[from] PolicyError),
     #[error("libtorch: {0}")]
     Torch(#[from] tch::TchError),
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("{path}: invalid JSON: {source}")]
-    Json {
-        path: PathBuf,
-        #[source]
-        source: serde_json::Error,
-    },
-    #[error("invalid policy spec {spec:?}: {reason}")]
-    Spec { spec: String, reason: String },
-    #[error("{path}: trained on observation layout v{found}, this build reads v{expected}")]
-    ObsVersion {
-        path: PathBuf,
-        found: u32,
-        expected: u32,
-    },
     #[error("invalid configuration: {0}")]
     Config(String),
     #[error("plot: {0}")]
@@ -40,9 +25,16 @@ pub enum LearnError {
 
 impl LearnError {
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> LearnError {
-        LearnError::Io {
+        LearnError::Policy(PolicyError::Io {
             path: path.into(),
             source,
-        }
+        })
+    }
+
+    pub(crate) fn json(path: impl Into<PathBuf>, source: serde_json::Error) -> LearnError {
+        LearnError::Policy(PolicyError::Json {
+            path: path.into(),
+            source,
+        })
     }
 }

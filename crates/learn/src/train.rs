@@ -279,10 +279,7 @@ impl RunDir {
     fn create(dir: &Path, cfg: &TrainConfig) -> Result<RunDir, LearnError> {
         std::fs::create_dir_all(dir.join("checkpoints")).map_err(|e| LearnError::io(dir, e))?;
         let cfg_path = dir.join("config.json");
-        let json = serde_json::to_string_pretty(cfg).map_err(|e| LearnError::Json {
-            path: cfg_path.clone(),
-            source: e,
-        })?;
+        let json = serde_json::to_string_pretty(cfg).map_err(|e| LearnError::json(&cfg_path, e))?;
         std::fs::write(&cfg_path, json).map_err(|e| LearnError::io(&cfg_path, e))?;
         let mpath = dir.join("metrics.csv");
         let f = std::fs::File::create(&mpath).map_err(|e| LearnError::io(&mpath, e))?;
@@ -850,10 +847,7 @@ fn write_checkpoint(out: &Path, ppo: &Ppo, state: &ResumeState) -> Result<(), Le
         tch::Tensor::write_safetensors(&a.state(), ck.join(format!("step-{n}.adam.safetensors")))?;
     }
     let path = ck.join(format!("step-{n}.resume.json"));
-    let json = serde_json::to_string_pretty(state).map_err(|e| LearnError::Json {
-        path: path.clone(),
-        source: e,
-    })?;
+    let json = serde_json::to_string_pretty(state).map_err(|e| LearnError::json(&path, e))?;
     // Written last: a checkpoint counts once its resume state exists.
     std::fs::write(&path, json).map_err(|e| LearnError::io(&path, e))
 }
@@ -889,10 +883,8 @@ pub fn resume(
 ) -> Result<TrainSummary, LearnError> {
     let cfg_path = dir.join("config.json");
     let text = std::fs::read_to_string(&cfg_path).map_err(|e| LearnError::io(&cfg_path, e))?;
-    let mut cfg: TrainConfig = serde_json::from_str(&text).map_err(|e| LearnError::Json {
-        path: cfg_path.clone(),
-        source: e,
-    })?;
+    let mut cfg: TrainConfig =
+        serde_json::from_str(&text).map_err(|e| LearnError::json(&cfg_path, e))?;
     if cfg.algo != Algo::Ppo || cfg.ppo.decision.is_none() {
         return Err(LearnError::Config(
             "--resume continues decision-level PPO runs (--preset team) only".into(),
@@ -900,10 +892,8 @@ pub fn resume(
     }
     if let Some(s) = steps {
         cfg.steps = s;
-        let json = serde_json::to_string_pretty(&cfg).map_err(|e| LearnError::Json {
-            path: cfg_path.clone(),
-            source: e,
-        })?;
+        let json =
+            serde_json::to_string_pretty(&cfg).map_err(|e| LearnError::json(&cfg_path, e))?;
         std::fs::write(&cfg_path, json).map_err(|e| LearnError::io(&cfg_path, e))?;
     }
     let ck = dir.join("checkpoints");
@@ -920,16 +910,13 @@ pub fn resume(
             }
         }
     }
-    let n = best.ok_or_else(|| LearnError::Spec {
+    let n = best.ok_or_else(|| naosoccer_policy::PolicyError::Spec {
         spec: dir.display().to_string(),
         reason: "no checkpoints/step-N.resume.json to resume from".into(),
     })?;
     let path = ck.join(format!("step-{n}.resume.json"));
     let text = std::fs::read_to_string(&path).map_err(|e| LearnError::io(&path, e))?;
-    let state: ResumeState = serde_json::from_str(&text).map_err(|e| LearnError::Json {
-        path: path.clone(),
-        source: e,
-    })?;
+    let state: ResumeState = serde_json::from_str(&text).map_err(|e| LearnError::json(&path, e))?;
     tch::manual_seed(cfg.seed as i64);
     train_ppo_decisions(&cfg, dir, Some(state), progress)
 }

@@ -911,7 +911,7 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
                     .softmax(-1, Kind::Float)
                     .copy_data(&mut p, n * ACTIONS);
                 for (i, o) in obs.iter().enumerate() {
-                    let u = sample_uniform(7, o.team.index(), o.player as usize, o.tick);
+                    let u = sample_uniform(7, o.team.index(), o.player.index(), o.tick);
                     assert_eq!(
                         sample(&probs[i * ACTIONS..(i + 1) * ACTIONS], u),
                         sample(&p[i * ACTIONS..(i + 1) * ACTIONS], u),

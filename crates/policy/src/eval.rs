@@ -19,7 +19,9 @@
 //! statistics and all, computed here and nowhere else.
 
 use naosoccer_client::{Policy, PolicyKind};
-use naosoccer_proto::{Action, MatchStats, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_proto::{
+    Action, MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
+};
 use naosoccer_referee::{Match, MatchConfig};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -152,8 +154,8 @@ pub struct MatchResult {
     /// Its global index in the evaluation.
     pub index: usize,
     pub seed: u64,
-    /// By colour: (blue, red).
-    pub score: (u32, u32),
+    /// By colour.
+    pub score: Score,
     pub stats: MatchStats,
     pub state_hash: u64,
     /// The first team (`--blue`) played red.
@@ -172,10 +174,7 @@ impl MatchResult {
 
     /// Goals of the first team (`first`: true) or the second.
     pub fn goals_of(&self, first: bool) -> u32 {
-        match self.team_of(first) {
-            Team::Blue => self.score.0,
-            Team::Red => self.score.1,
-        }
+        *self.score.get(self.team_of(first))
     }
 
     /// What the summary needs of this match.
@@ -1019,9 +1018,9 @@ mod tests {
         let by_colour: u32 = (0..4)
             .map(|i| {
                 if i % 2 == 1 {
-                    reversed[i].score.1
+                    reversed[i].score.red
                 } else {
-                    straight[i].score.0
+                    straight[i].score.blue
                 }
             })
             .sum();

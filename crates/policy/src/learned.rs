@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use naosoccer_client::Policy;
-use naosoccer_proto::{Action, Observation, PLAYERS_PER_TEAM};
+use naosoccer_proto::{Action, Observation};
 use serde::{Deserialize, Serialize};
 
 use crate::actions::MASKED_LOGIT;
@@ -418,7 +418,7 @@ impl LearnedPolicy {
         let mut i = 0;
         for &(seed, obs) in teams {
             for o in obs {
-                let key = (seed, o.team.index(), o.player as usize % PLAYERS_PER_TEAM);
+                let key = (seed, o.team.index(), o.player.index());
                 let decides = match self.decision {
                     None => true,
                     Some(_) => {

@@ -249,7 +249,7 @@ impl ObsScale {
     /// and little to the side is one a kick reaches.
     fn encode_v3_tail(&self, obs: &Observation, out: &mut [f32]) {
         let sx = 1.0 / self.half_length;
-        let me = obs.player as usize % PLAYERS_PER_TEAM;
+        let me = obs.player.index();
         let r = obs.me();
         let (s, c) = r.heading.sin_cos();
         let local = |x: f32, y: f32| {
@@ -294,7 +294,7 @@ impl ObsScale {
 
     fn encode_v2(&self, obs: &Observation, out: &mut [f32]) {
         let (sx, sy) = (1.0 / self.half_length, 1.0 / self.half_width);
-        let me = obs.player as usize % PLAYERS_PER_TEAM;
+        let me = obs.player.index();
         let r = obs.me();
         let (s, c) = r.heading.sin_cos();
         let flag = |b: bool| f32::from(u8::from(b));
@@ -387,7 +387,7 @@ impl ObsScale {
         out[17] = obs.ball.y * sy;
         out[18] = obs.ball.vx / BALL_SPEED_SCALE;
         out[19] = obs.ball.vy / BALL_SPEED_SCALE;
-        let me = obs.player as usize % PLAYERS_PER_TEAM;
+        let me = obs.player.index();
         for p in 0..PLAYERS_PER_TEAM {
             out[40 + p] = if p == me { 1.0 } else { 0.0 };
         }
@@ -461,7 +461,13 @@ mod tests {
     fn named2(v: &[f32], name: &str) -> f32 {
         match FEATURE_NAMES.iter().position(|n| *n == name) {
             Some(i) => v[i],
-            None => v[OBS_DIM_V2 + FEATURE_NAMES_V3_TAIL.iter().position(|n| *n == name).unwrap()],
+            None => {
+                v[OBS_DIM_V2
+                    + FEATURE_NAMES_V3_TAIL
+                        .iter()
+                        .position(|n| *n == name)
+                        .unwrap()]
+            }
         }
     }
 
@@ -490,7 +496,7 @@ mod tests {
         Observation {
             tick: 7,
             team: Team::Red,
-            player: 2,
+            player: naosoccer_proto::Player::new(2).unwrap(),
             time_left: 100.0,
             score: ScoreObs {
                 own: 1,
@@ -636,7 +642,11 @@ mod tests {
         assert_eq!(test_scale(2).dim(), OBS_DIM_V2);
         let mut v3 = [7.0; OBS_DIM];
         test_scale(3).encode(&obs, &mut v3);
-        assert_eq!(v3[..OBS_DIM_V2], v2[..OBS_DIM_V2], "version 3 starts with version 2");
+        assert_eq!(
+            v3[..OBS_DIM_V2],
+            v2[..OBS_DIM_V2],
+            "version 3 starts with version 2"
+        );
         assert_eq!(test_scale(3).dim(), OBS_DIM);
     }
 
@@ -665,11 +675,19 @@ mod tests {
         let (px, py) = (-0.3f32, 0.55f32);
         let t = (ux * px + uy * py) / (ux * ux + uy * uy);
         let lane = (px - t * ux).hypot(py - t * uy);
-        assert!(close(n("mate1_lane"), lane), "{} vs {lane}", n("mate1_lane"));
+        assert!(
+            close(n("mate1_lane"), lane),
+            "{} vs {lane}",
+            n("mate1_lane")
+        );
         // The nearest opponent to (1, -1) is opponent 3 at (-0.3, -0.45)
         // (the two at the centre are 1.414 m away): 1.3 m ahead and 0.55 m
         // to the right (facing -x, its left is -y).
         assert!(close(n("opp_near_ahead"), 1.3 / 3.0));
-        assert!(close(n("opp_near_side"), -0.55 / 3.0), "{}", n("opp_near_side"));
+        assert!(
+            close(n("opp_near_side"), -0.55 / 3.0),
+            "{}",
+            n("opp_near_side")
+        );
     }
 }

@@ -405,6 +405,11 @@ pub struct MatchInfo {
     pub state: MatchState,
     pub mode: Mode,
     pub fill: Fill,
+    /// The trained team that plays the slots no client joined, instead of
+    /// `fill`, when the server was started with one (`--fill ppo:DIR`: its
+    /// spec). 1.2; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill_team: Option<String>,
     pub seed: u64,
     /// Control ticks per second of game time.
     pub control_hz: f32,
@@ -680,7 +685,7 @@ mod tests {
         Observation {
             tick: 7,
             team: Team::Red,
-            player,
+            player: Player::new(player as usize).unwrap(),
             time_left: 599.3,
             score: ScoreObs {
                 own: 1,
@@ -783,6 +788,43 @@ mod tests {
         let e: ErrorMsg =
             serde_json::from_str(r#"{"code":"quota","message":"m","fatal":false}"#).unwrap();
         assert_eq!(e.code, ErrorCode::Unknown);
+    }
+
+    /// Issue 15: a later server's new event kind does not break a 1.2
+    /// client's observation; the known events around it stay.
+    #[test]
+    fn unknown_event_kinds_are_read_as_unknown() {
+        let owned = ServerMsg::Observation(ObservationMsg {
+            match_id: MatchId(4),
+            tick: 7,
+            observations: vec![obs(1)],
+            events: vec![
+                crate::types::Event::HalfTime { tick: 5 },
+                crate::types::Event::End { tick: 6 },
+            ],
+        });
+        let mut v = serde_json::to_value(&owned).unwrap();
+        v["events"].as_array_mut().unwrap().insert(
+            1,
+            serde_json::json!({"kind": "drop_ball", "tick": 6, "x": 1.5}),
+        );
+        let back: ServerMsg = serde_json::from_value(v).unwrap();
+        let ServerMsg::Observation(o) = back else {
+            panic!("{back:?}")
+        };
+        use crate::types::Event;
+        assert_eq!(
+            o.events,
+            [
+                Event::HalfTime { tick: 5 },
+                Event::Unknown,
+                Event::End { tick: 6 }
+            ]
+        );
+        assert_eq!(o.events[1].tick(), None);
+        assert_eq!(o.observations, vec![obs(1)]);
+        // A known kind with a bad field is still an error, not `Unknown`.
+        assert!(serde_json::from_str::<Event>(r#"{"kind":"end","tick":"x"}"#).is_err());
     }
 
     #[test]

@@ -285,8 +285,8 @@ pub struct Observation {
     /// Control tick this observation was taken at (before the action is applied).
     pub tick: u64,
     pub team: Team,
-    /// Which of `own` is the receiving robot (0..=3).
-    pub player: u8,
+    /// Which of `own` is the receiving robot (0..=3; a number on the wire).
+    pub player: Player,
     /// Match time left in seconds.
     pub time_left: f32,
     pub score: ScoreObs,
@@ -369,7 +369,7 @@ pub struct SetPlayObs {
 impl Observation {
     /// The receiving robot.
     pub fn me(&self) -> &RobotObs {
-        &self.own[self.player as usize % PLAYERS_PER_TEAM]
+        &self.own[self.player.index()]
     }
 }
 
@@ -445,11 +445,18 @@ pub enum Event {
     End {
         tick: u64,
     },
+    /// An event of a kind this build does not know: a later server's (a
+    /// minor version may add kinds; docs/PROTOCOL.md, "Events"). Read so
+    /// that the message holding it still decodes; skip it. Its fields are
+    /// dropped, and the referee never produces it.
+    #[serde(other)]
+    Unknown,
 }
 
 impl Event {
-    pub fn tick(&self) -> u64 {
-        match self {
+    /// The tick the event happened on (`None` for [`Event::Unknown`]).
+    pub fn tick(&self) -> Option<u64> {
+        Some(match self {
             Event::Goal { tick, .. }
             | Event::Kick { tick, .. }
             | Event::Pass { tick, .. }
@@ -461,7 +468,8 @@ impl Event {
             | Event::SetPlay { tick, .. }
             | Event::HalfTime { tick }
             | Event::End { tick } => *tick,
-        }
+            Event::Unknown => return None,
+        })
     }
 }
 

@@ -113,7 +113,7 @@ pub struct StateRecord {
 impl StateRecord {
     pub fn of(m: &Match) -> StateRecord {
         let snap = m.sim().snapshot();
-        let (blue, red) = m.score();
+        let naosoccer_proto::PerTeam { blue, red } = m.score();
         let b = &snap.ball;
         StateRecord {
             tick: m.tick(),

@@ -222,7 +222,9 @@ impl<W: Write + Seek> Recorder<W> {
             },
         )?;
         for e in events {
-            self.write_json(Ch::Events, e.tick() * self.tick_ns, e)?;
+            // A match's own events always have a tick (never `Unknown`).
+            let at = e.tick().unwrap_or(tick);
+            self.write_json(Ch::Events, at * self.tick_ns, e)?;
         }
         self.write_state(m)?;
         if self.opts.flush_every_ticks > 0 && m.tick().is_multiple_of(self.opts.flush_every_ticks) {
@@ -234,7 +236,7 @@ impl<W: Write + Seek> Recorder<W> {
     /// Writes the final statistics, the summary and the index, and returns
     /// the number of messages per channel and the underlying writer.
     pub fn finish(mut self, m: &Match) -> Result<(RecordingSummary, W), RecordError> {
-        let (blue, red) = m.score();
+        let naosoccer_proto::PerTeam { blue, red } = m.score();
         let fin = FinalRecord {
             ticks: m.tick(),
             score: ScoreRecord { blue, red },

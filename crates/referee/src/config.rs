@@ -147,8 +147,18 @@ pub struct RewardConfig {
     pub progress: f32,
     /// Ours: potential-based shaping by each robot's own distance to the
     /// ball, per metre (potential `-distance`), added to that robot's reward
-    /// outside the log compression; 0 (off) by default.
+    /// outside the log compression; 0 (off) by default. With `support`
+    /// above 0 it pays only each team's chaser (its robot nearest the ball).
     pub approach: f32,
+    /// Ours: potential-based shaping that spreads a team for passes, per
+    /// metre. Every robot but its team's chaser has the potential
+    /// `-support * distance` to its support spot: `support_ahead` metres
+    /// ahead of the ball toward the opponent goal and `support_side` metres
+    /// to the side of the ball the robot is on, kept 0.3 m inside the field.
+    /// Added outside the log compression; 0 (off) by default.
+    pub support: f32,
+    pub support_ahead: f32,
+    pub support_side: f32,
     /// The discount of the shaping terms (set it to the learner's per-tick
     /// gamma, which keeps them policy-invariant, Ng et al. 1999); 1 by default.
     pub shaping_gamma: f32,
@@ -171,6 +181,9 @@ impl Default for RewardConfig {
             opponent_control: 0.2,
             progress: 0.0,
             approach: 0.0,
+            support: 0.0,
+            support_ahead: 1.5,
+            support_side: 1.0,
             shaping_gamma: 1.0,
             pass: 0.0,
             pass_min_distance: 1.0,
@@ -314,6 +327,9 @@ impl MatchConfig {
             ("reward.opponent_control", w.opponent_control),
             ("reward.progress", w.progress),
             ("reward.approach", w.approach),
+            ("reward.support", w.support),
+            ("reward.support_ahead", w.support_ahead),
+            ("reward.support_side", w.support_side),
             ("reward.pass", w.pass),
             ("reward.pass_min_distance", w.pass_min_distance),
         ] {

@@ -1,6 +1,7 @@
 //! `Match`, the one driver: apply actions, step the sim for one control tick,
 //! run the rules, apply their commands, keep score and statistics.
 
+use naosoccer_proto::msg::{Frame, Pitch};
 use naosoccer_proto::{
     Action, Event, MatchStats, Observation, RobotId, Score, SetPlayKind, SetPlayObs, Team,
     PLAYERS_PER_TEAM, ROBOTS,
@@ -219,16 +220,46 @@ impl Match {
 
     /// Each robot's shaping potential in the current state: `progress`
     /// times the ball's x in its team's frame minus `approach` times its
-    /// distance to the ball.
+    /// distance to the ball; with `support`, the approach term only for its
+    /// team's chaser and `support` times the distance to its support spot
+    /// for the others (`RewardConfig::support`).
     fn potentials(&self) -> [f32; ROBOTS] {
         let w = &self.cfg.reward;
         let snap = self.sim.snapshot();
         let [bx, by, _] = snap.ball.pos;
-        std::array::from_fn(|i| {
+        let dist: [f32; ROBOTS] = std::array::from_fn(|i| {
             let r = &snap.robots[i];
-            let sx = if i < PLAYERS_PER_TEAM { 1.0 } else { -1.0 };
-            let d = (bx - r.pos[0]).hypot(by - r.pos[1]);
-            w.progress * sx * bx - w.approach * d
+            (bx - r.pos[0]).hypot(by - r.pos[1])
+        });
+        if w.support <= 0.0 {
+            return std::array::from_fn(|i| {
+                let sx = if i < PLAYERS_PER_TEAM { 1.0 } else { -1.0 };
+                w.progress * sx * bx - w.approach * dist[i]
+            });
+        }
+        // Each team's chaser: its robot nearest the ball (the lower index on a tie).
+        let chaser = |team: usize| {
+            (team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM)
+                .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
+                .unwrap_or(team * PLAYERS_PER_TEAM)
+        };
+        let chasers = [chaser(0), chaser(1)];
+        let (lx, ly) = (
+            (self.field.half_length - 0.3).max(0.0),
+            (self.field.half_width - 0.3).max(0.0),
+        );
+        std::array::from_fn(|i| {
+            let team = i / PLAYERS_PER_TEAM;
+            let sx = if team == 0 { 1.0 } else { -1.0 };
+            let progress = w.progress * sx * bx;
+            if i == chasers[team] {
+                return progress - w.approach * dist[i];
+            }
+            let r = &snap.robots[i];
+            let side = if r.pos[1] >= by { 1.0 } else { -1.0 };
+            let spot_x = (bx + sx * w.support_ahead).clamp(-lx, lx);
+            let spot_y = (by + side * w.support_side).clamp(-ly, ly);
+            progress - w.support * (spot_x - r.pos[0]).hypot(spot_y - r.pos[1])
         })
     }
 
@@ -350,7 +381,8 @@ impl Match {
             .award(SetPlayKind::KickOff, team, (0.0, 0.0), first_tick);
     }
 
-    /// What `player` of `team` sees now, in its team's frame (attacking +x).
+    /// What `player` (0..=3; panics otherwise) of `team` sees now, in its
+    /// team's frame (attacking +x).
     pub fn observe(&self, team: Team, player: usize) -> Observation {
         let mut o = observe::blank_observation();
         self.observe_into(team, player, &mut o);
@@ -402,15 +434,25 @@ impl Match {
         self.steps_per_tick
     }
 
-    /// Goals per team.
-    pub fn goals(&self) -> Score {
-        self.score
+    /// The pitch as the protocol's `joined` announces it.
+    pub fn pitch(&self) -> Pitch {
+        let cfg = &self.cfg;
+        Pitch {
+            field_length: cfg.sim.field_length,
+            field_width: cfg.sim.field_width,
+            goal_width: cfg.sim.goal_width,
+            goal_depth: cfg.sim.goal_depth,
+            goal_height: cfg.sim.goal_height,
+            ball_radius: cfg.sim.ball_radius,
+            b_d: cfg.rules.b_d,
+            b_rad: cfg.rules.b_rad,
+            frame: Frame::Team,
+        }
     }
 
-    /// [`goals`](Self::goals) as a `(blue, red)` pair, for callers that
-    /// destructure it.
-    pub fn score(&self) -> (u32, u32) {
-        (self.score.blue, self.score.red)
+    /// Goals per team.
+    pub fn score(&self) -> Score {
+        self.score
     }
 
     /// Statistics so far; control rates are shares of the ticks in which any

@@ -4,8 +4,8 @@
 use std::f32::consts::PI;
 
 use naosoccer_proto::{
-    BallObs, Observation, RobotId, RobotObs, Score, ScoreObs, SetPlayObs, Team, PLAYERS_PER_TEAM,
-    ROBOTS,
+    BallObs, Observation, Player, RobotId, RobotObs, Score, ScoreObs, SetPlayObs, Team,
+    PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_sim::Snapshot;
 
@@ -51,7 +51,7 @@ pub(crate) fn fill(
     let opp_base = team.other().index() * PLAYERS_PER_TEAM;
     out.tick = ctx.tick;
     out.team = team;
-    out.player = (player % PLAYERS_PER_TEAM) as u8;
+    out.player = Player::new(player).expect("a player number, 0..=3");
     out.time_left = ctx.time_left;
     out.score = ScoreObs {
         own: *ctx.score.get(team),
@@ -92,7 +92,7 @@ pub fn blank_observation() -> Observation {
     Observation {
         tick: 0,
         team: Team::Blue,
-        player: 0,
+        player: Player::new(0).expect("player 0"),
         time_left: 0.0,
         score: ScoreObs::default(),
         own: [RobotObs::default(); PLAYERS_PER_TEAM],

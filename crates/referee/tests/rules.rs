@@ -2,7 +2,7 @@
 
 use std::f32::consts::PI;
 
-use naosoccer_proto::{Action, Event, RobotId, SetPlayKind, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_proto::{Action, Event, RobotId, Score, SetPlayKind, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 
 const STAY: [Action; ROBOTS] = [Action::Stay; ROBOTS];
@@ -67,7 +67,7 @@ fn ball_rolled_over_the_line_between_the_posts_scores_and_goes_back_to_the_centr
         ),
         "no blue goal in {events:?}"
     );
-    assert_eq!(m.score(), (1, 0));
+    assert_eq!(m.score(), Score { blue: 1, red: 0 });
     assert_eq!(m.stats().blue.goals, 1);
     // Red conceded, so red kicks off; the ball is back on the centre spot.
     assert!(events.iter().any(|e| matches!(
@@ -96,7 +96,7 @@ fn ball_rolled_wide_of_the_post_is_out_not_a_goal() {
     let events = run_until(&mut m, &STAY, 40, |_, ev| {
         ev.iter().any(|e| matches!(e, Event::BallOut { .. }))
     });
-    assert_eq!(m.score(), (0, 0), "{events:?}");
+    assert_eq!(m.score(), Score::default(), "{events:?}");
     assert!(!events.iter().any(|e| matches!(e, Event::Goal { .. })));
     let out = events.iter().find_map(|e| match e {
         Event::BallOut { x, y, .. } => Some((*x, *y)),
@@ -653,6 +653,73 @@ fn progress_reward_follows_the_ball_toward_the_goal() {
     assert_eq!((blue, red), ([0.0; 4], [0.0; 4]), "off by default");
 }
 
+/// `reward.support`: each team's robot nearest the ball (its chaser) is paid
+/// `approach` for closing in; the others are paid `support` for closing on
+/// their support spot (ahead of the ball toward the opponent goal, to the
+/// ball's side they are on, kept inside the field). Potential-based: with
+/// `shaping_gamma` g the tick's reward is `g * phi' - phi`.
+#[test]
+fn support_shaping_pays_the_chaser_for_the_ball_and_the_others_for_their_spots() {
+    let mut cfg = MatchConfig::default();
+    cfg.reward.goal = 0.0;
+    cfg.reward.close = 0.0;
+    cfg.reward.control = 0.0;
+    cfg.reward.opponent_control = 0.0;
+    cfg.reward.approach = 1.0;
+    cfg.reward.support = 2.0;
+    cfg.reward.shaping_gamma = 0.5;
+    let mut m = Match::new(&cfg, 4).unwrap();
+    clear_the_pitch(&mut m);
+    m.sim_mut().place_ball(0.5, 0.0);
+    // Blue: player 1 is the chaser; player 2 stands above the ball, player 3
+    // below it; player 0 in front of its own goal, above the ball.
+    m.sim_mut().place_robot(0, -2.5, 0.2, 0.0);
+    m.sim_mut().place_robot(1, 0.2, 0.0, 0.0);
+    m.sim_mut().place_robot(2, 1.0, 1.5, 0.0);
+    m.sim_mut().place_robot(3, 0.0, -1.5, 0.0);
+    // Red (attacking -x): its chaser is player 3, the nearest of its robots.
+    m.sim_mut().place_robot(7, 0.9, 0.3, std::f32::consts::PI);
+    let (lx, ly) = (2.7f32, 1.95f32);
+    let phi = |s: &naosoccer_sim::Snapshot| -> [f32; ROBOTS] {
+        let [bx, by, _] = s.ball.pos;
+        let d = |i: usize, x: f32, y: f32| (x - s.robots[i].pos[0]).hypot(y - s.robots[i].pos[1]);
+        std::array::from_fn(|i| {
+            let team = i / 4;
+            let chaser = (team * 4..team * 4 + 4)
+                .min_by(|&a, &b| d(a, bx, by).total_cmp(&d(b, bx, by)))
+                .unwrap();
+            if i == chaser {
+                return -d(i, bx, by);
+            }
+            let sx = if team == 0 { 1.0 } else { -1.0 };
+            let side = if s.robots[i].pos[1] >= by { 1.0 } else { -1.0 };
+            let spot = ((bx + sx * 1.5).clamp(-lx, lx), (by + side).clamp(-ly, ly));
+            -2.0 * d(i, spot.0, spot.1)
+        })
+    };
+    let before = phi(m.sim().snapshot());
+    let mut physics = [0.0; ROBOTS];
+    m.step_observed(&STAY, |sim| physics = phi(sim.snapshot()));
+    let blue = m.rewards(Team::Blue);
+    let red = m.rewards(Team::Red);
+    for i in 0..ROBOTS {
+        let got = if i < 4 { blue[i] } else { red[i - 4] };
+        let want = 0.5 * physics[i] - before[i];
+        assert!((got - want).abs() < 1e-4, "robot {i}: {got} vs {want}");
+    }
+    // The chaser's potential is its distance to the ball (0.3 m), the
+    // others' twice the distance to their spots: player 2's spot (2, 1) is
+    // 1.0 m ahead of it and 0.5 m to its right; player 0's spot is the
+    // same, far away.
+    assert!((before[1] + 0.3).abs() < 0.02, "{}", before[1]);
+    assert!(
+        (before[2] + 2.0 * 1.0f32.hypot(0.5)).abs() < 0.02,
+        "{}",
+        before[2]
+    );
+    assert!(before[0] < -8.0, "{}", before[0]);
+}
+
 /// Issue 13: the shaping terms are potential-based, outside the log, and
 /// measured on the state before any restart. With shaping_gamma = 1 they
 /// telescope between restarts: over a whole match each robot's shaping sums
@@ -769,7 +836,7 @@ fn self_play_results(kind: naosoccer_client::PolicyKind, n: u64, minutes: f32) -
         }
         m.score()
     };
-    let scores: Vec<(u32, u32)> = std::thread::scope(|s| {
+    let scores: Vec<Score> = std::thread::scope(|s| {
         let a = s.spawn(|| (0..n).step_by(2).map(play).collect::<Vec<_>>());
         let b = s.spawn(|| (1..n).step_by(2).map(play).collect::<Vec<_>>());
         let mut v = a.join().unwrap();
@@ -777,8 +844,8 @@ fn self_play_results(kind: naosoccer_client::PolicyKind, n: u64, minutes: f32) -
         v
     });
     let mut r = [0; 3];
-    for (b, red) in scores {
-        r[match b.cmp(&red) {
+    for s in scores {
+        r[match s.blue.cmp(&s.red) {
             std::cmp::Ordering::Greater => 0,
             std::cmp::Ordering::Less => 1,
             std::cmp::Ordering::Equal => 2,
@@ -815,4 +882,18 @@ fn issue_12_mirror_matches_favour_neither_side() {
             "{kind} vs {kind}: blue won {blue}, red {red} ({draws} draws)"
         );
     }
+}
+
+/// Issue 15: the scripted team's defaults are the default match's pitch
+/// (sizes and `b_rad`), and its kick reach lies within the sim's, so the
+/// constants cannot drift from `assets/match.toml` unnoticed.
+#[test]
+fn scripted_defaults_agree_with_the_default_match() {
+    use naosoccer_client::policy::ScriptedParams;
+    let m = Match::new(&MatchConfig::default(), 1).unwrap();
+    let d = ScriptedParams::default();
+    assert_eq!(ScriptedParams::for_pitch(&m.pitch()), d);
+    let sim = &m.config().sim;
+    assert!(sim.kick_reach_min <= d.reach_min && d.reach_max <= sim.kick_reach_max);
+    assert!(d.reach_half_width <= sim.kick_half_width);
 }

@@ -123,7 +123,8 @@ async fn run(s: &mut Session) -> Result<(), WireError> {
                                 return Ok(());
                             }
                             let m = format!("match {} ended unexpectedly", seat.match_id);
-                            s.send(&ServerMsg::Error(ErrorMsg::new(ErrorCode::Internal, m))).await?;
+                            let e = ErrorMsg::new(ErrorCode::Internal, m).in_reply_to("action");
+                            s.send(&ServerMsg::Error(e)).await?;
                         }
                     }
                 }

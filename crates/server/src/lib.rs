@@ -40,5 +40,5 @@ mod shared;
 
 pub use config::Limits;
 pub use config::{ConfigError, ServerConfig, TokenConfig, Tokens};
-pub use observer::{Hooks, MatchObserver, TickRecord};
+pub use observer::{FillFactory, FillTeam, Hooks, MatchObserver, TickRecord};
 pub use server::{run, run_with, ServerError};

@@ -16,6 +16,7 @@ mod info;
 
 use crate::match_msg::{send_observation, ConnEntry, ConnId, MatchCmd};
 use crate::observer::{MatchObserver, TickRecord};
+use naosoccer_client::policy::ScriptedParams;
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Fill, MatchId, MatchInfo, MatchState, Mode};
 use naosoccer_proto::{Action, Event, Observation, RobotId, Team, ROBOTS};
@@ -35,6 +36,8 @@ pub(crate) struct MatchParams {
     pub seed: u64,
     pub mode: Mode,
     pub fill: Fill,
+    /// The trained team that plays the open slots instead of `fill`.
+    pub fill_team: Option<String>,
     pub start_players: u8,
     pub deadline: Duration,
     /// The server's start: real-time matches schedule their ticks from it.
@@ -100,7 +103,8 @@ impl MatchTask {
         custom_fill: Option<Vec<Box<dyn Policy>>>,
     ) -> MatchTask {
         let kind = match params.fill {
-            Fill::Scripted => PolicyKind::Scripted,
+            // On this match's pitch (the defaults on the default pitch).
+            Fill::Scripted => PolicyKind::scripted_with(ScriptedParams::for_pitch(&game.pitch())),
             Fill::Idle => PolicyKind::Idle,
         };
         let fillers = match custom_fill {
@@ -325,7 +329,7 @@ impl MatchTask {
                 lateness,
             });
         }
-        let score = self.game.goals();
+        let score = self.game.score();
         let now = self.game.tick();
         self.info.send_modify(|i| {
             i.tick = now;

@@ -41,20 +41,28 @@ pub type ObserverFactory = dyn Fn(&MatchInfo) -> Option<Box<dyn MatchObserver>> 
 pub type FillFactory =
     dyn Fn(u64, naosoccer_proto::RobotId) -> Box<dyn naosoccer_client::Policy> + Send + Sync;
 
+/// A team that plays the slots nobody joined, in every match, instead of
+/// the match's `fill` (`naosoccer server --fill ppo:DIR`: a trained team).
+#[derive(Clone)]
+pub struct FillTeam {
+    /// What the matches report as their `fill_team` and recordings name
+    /// (`ppo:DIR`).
+    pub spec: String,
+    pub make: Arc<FillFactory>,
+}
+
 /// Extension points of a server.
 #[derive(Clone, Default)]
 pub struct Hooks {
     pub observer: Option<Arc<ObserverFactory>>,
-    /// Plays the slots nobody joined, in every match, instead of the
-    /// match's `fill` (`naosoccer server --fill ppo:DIR`: a trained team).
-    pub fill: Option<Arc<FillFactory>>,
+    pub fill: Option<FillTeam>,
 }
 
 impl std::fmt::Debug for Hooks {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Hooks")
             .field("observer", &self.observer.is_some())
-            .field("fill", &self.fill.is_some())
+            .field("fill", &self.fill.as_ref().map(|t| &t.spec))
             .finish()
     }
 }

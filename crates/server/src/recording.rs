@@ -51,7 +51,8 @@ fn fill_name(fill: Fill) -> &'static str {
 
 impl MatchObserver for McapObserver {
     fn on_start(&mut self, info: &MatchInfo, game: &Match) {
-        let players = format!("clients, empty slots {}", fill_name(info.fill));
+        let fill = info.fill_team.as_deref().unwrap_or(fill_name(info.fill));
+        let players = format!("clients, empty slots {fill}");
         let mut meta = MatchMeta::of(game, &players, &players, "server");
         meta.match_id = Some(info.match_id.0);
         meta.mode = Some(

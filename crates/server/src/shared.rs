@@ -171,6 +171,7 @@ impl Shared {
             seed: req.seed.unwrap_or(cfg.seed.wrapping_add(id.0 - 1)),
             mode: req.mode.unwrap_or(cfg.mode),
             fill: req.fill.unwrap_or(cfg.fill),
+            fill_team: self.hooks.fill.as_ref().map(|f| f.spec.clone()),
             start_players,
             deadline: Duration::from_millis(deadline_ms),
             epoch: self.epoch,
@@ -190,7 +191,7 @@ impl Shared {
         let observer = crate::recording::observer_for(&self.config, hook, &info);
         let fillers = self.hooks.fill.as_ref().map(|f| {
             naosoccer_proto::RobotId::all()
-                .map(|r| f(params.seed, r))
+                .map(|r| (f.make)(params.seed, r))
                 .collect()
         });
         let task = MatchTask::new(

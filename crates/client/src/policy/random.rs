@@ -41,7 +41,7 @@ mod tests {
         Observation {
             tick: 0,
             team: Team::Blue,
-            player: 0,
+            player: naosoccer_proto::Player::new(0).unwrap(),
             time_left: 0.0,
             score: Default::default(),
             own: Default::default(),

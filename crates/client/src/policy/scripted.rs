@@ -16,13 +16,20 @@
 //! The only memory is per robot (turning hysteresis), so one instance per
 //! robot, as the server and runner build them, is deterministic.
 
+use naosoccer_proto::msg::Pitch;
 use naosoccer_proto::{Action, Observation, RobotObs, PLAYERS_PER_TEAM};
 use serde::{Deserialize, Serialize};
 
 use super::Policy;
 
-/// The scripted team's parameters. Pitch sizes and kick reach are the
-/// defaults of `assets/match.toml`; the policy sees no config, only observations.
+/// The scripted team's parameters. The defaults' pitch sizes and `b_rad`
+/// are those of `assets/match.toml` (a test in crates/referee keeps them
+/// equal); a server's scripted fill takes them from its match's
+/// configuration ([`ScriptedParams::for_pitch`]). The kick reach is tuned a
+/// margin inside the sim's `kick_reach_min`/`kick_reach_max` and the
+/// protocol does not announce it, so it stays a parameter: deriving it from
+/// the configuration would change how the team plays, and with it every
+/// recorded match and shipped evaluation against it.
 ///
 /// A variant names the fields it changes, as `KEY=VAL,...` after `scripted:`
 /// or as a TOML file of `KEY = VAL` lines ([`ScriptedParams::parse_spec`]);
@@ -99,6 +106,18 @@ impl Default for ScriptedParams {
 }
 
 impl ScriptedParams {
+    /// The defaults on `pitch` (as `joined` announces it, or
+    /// `Match::pitch`): half the field length, half the goal width and
+    /// `b_rad` from it. On the default pitch: the defaults.
+    pub fn for_pitch(pitch: &Pitch) -> ScriptedParams {
+        ScriptedParams {
+            half_length: pitch.field_length / 2.0,
+            goal_half_width: pitch.goal_width / 2.0,
+            b_rad: pitch.b_rad,
+            ..ScriptedParams::default()
+        }
+    }
+
     /// The field names, alphabetically.
     pub fn keys() -> Vec<String> {
         match serde_json::to_value(ScriptedParams::default()) {
@@ -259,7 +278,7 @@ impl Scripted {
     }
 
     fn decide(&mut self, obs: &Observation) -> Action {
-        if obs.player == 0 {
+        if obs.player.index() == 0 {
             self.keeper(obs)
         } else {
             self.field_player(obs)
@@ -283,7 +302,7 @@ impl Scripted {
     }
 
     fn field_player(&mut self, obs: &Observation) -> Action {
-        let me_idx = obs.player as usize;
+        let me_idx = obs.player.index();
         let ball = [obs.ball.x, obs.ball.y];
         let engager = engager(obs);
         if engager == Some(me_idx) {
@@ -390,7 +409,7 @@ impl Scripted {
         let me = obs.me();
         let ball = [obs.ball.x, obs.ball.y];
         obs.own.iter().enumerate().any(|(i, t)| {
-            if i == obs.player as usize || t.fallen || t.x < ball[0] + 0.3 {
+            if i == obs.player.index() || t.fallen || t.x < ball[0] + 0.3 {
                 return false;
             }
             let lane = sub([t.x, t.y], ball);
@@ -570,7 +589,7 @@ mod tests {
         Observation {
             tick: 0,
             team: Team::Blue,
-            player,
+            player: naosoccer_proto::Player::new(player as usize).unwrap(),
             time_left: 600.0,
             score: Default::default(),
             own,

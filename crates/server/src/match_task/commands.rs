@@ -3,9 +3,8 @@
 
 use super::{MatchTask, Slot, Stop};
 use crate::match_msg::{deliver, send_observation, ConnEntry, ConnId, MatchCmd, Outgoing};
-use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Frame, Joined, Mode, Pitch, Player};
+use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Joined, Mode, Player};
 use naosoccer_proto::RobotId;
-use naosoccer_referee::Match;
 
 impl MatchTask {
     /// Takes a connection out of the match; its robots stand from now on.
@@ -62,7 +61,7 @@ impl MatchTask {
                     control_hz: self.game.config().control_hz,
                     total_ticks: self.game.total_ticks(),
                     deadline_ms: self.params.deadline.as_millis() as u64,
-                    pitch: Some(pitch(&self.game)),
+                    pitch: Some(self.game.pitch()),
                 };
                 if reply.send(Ok(joined)).is_err() {
                     return None; // the connection went away meanwhile
@@ -150,21 +149,5 @@ impl MatchTask {
             }
         }
         None
-    }
-}
-
-/// The pitch as `joined` announces it (protocol 1.2).
-fn pitch(game: &Match) -> Pitch {
-    let cfg = game.config();
-    Pitch {
-        field_length: cfg.sim.field_length,
-        field_width: cfg.sim.field_width,
-        goal_width: cfg.sim.goal_width,
-        goal_depth: cfg.sim.goal_depth,
-        goal_height: cfg.sim.goal_height,
-        ball_radius: cfg.sim.ball_radius,
-        b_d: cfg.rules.b_d,
-        b_rad: cfg.rules.b_rad,
-        frame: Frame::Team,
     }
 }

@@ -15,7 +15,7 @@ impl MatchTask {
             Stop::Panicked => EndReason::Internal,
             Stop::Ended => EndReason::Ended,
         };
-        let score = self.game.goals();
+        let score = self.game.score();
         let (blue, red) = (score.blue, score.red);
         let end = MatchEnd {
             match_id: id,
@@ -33,10 +33,14 @@ impl MatchTask {
         };
         if reason == EndReason::Internal {
             tracing::error!(match_id = %id, tick = end.tick, "match task panicked; ending the match");
-            let e = ErrorMsg::new(
+            // It answers the actions for the tick that failed, so a client
+            // that pairs replies in order pairs it with them.
+            let mut e = ErrorMsg::new(
                 ErrorCode::Internal,
                 format!("match {id} failed inside the server at tick {}; it has ended (the server goes on)", end.tick),
-            );
+            )
+            .in_reply_to("action");
+            e.tick = Some(end.tick);
             for c in &self.conns {
                 deliver(&c.out, Outgoing::Error(e.clone()));
             }

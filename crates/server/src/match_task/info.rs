@@ -14,6 +14,7 @@ impl MatchTask {
             state: MatchState::Waiting,
             mode: params.mode,
             fill: params.fill,
+            fill_team: params.fill_team.clone(),
             seed: params.seed,
             control_hz: game.config().control_hz,
             tick: game.tick(),

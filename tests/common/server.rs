@@ -1,6 +1,5 @@
-//! Helpers shared by the server tests (included with `#[path]`): a real
+//! Helpers shared by the server tests (`common::server`): a real
 //! server on 127.0.0.1:0 and the in-process reference match.
-#![allow(dead_code)]
 
 use naosoccer_client::{Client, PolicyKind, Push};
 use naosoccer_proto::msg::Score;

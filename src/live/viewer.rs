@@ -1,0 +1,147 @@
+//! A minimal Foxglove viewer: it speaks the SDK's WebSocket protocol
+//! (`foxglove.sdk.v1`: JSON control messages, binary message data) well
+//! enough to subscribe to a match's channels and read what they carry.
+//! `bench server --viewer` watches its match with it, and the live tests
+//! use it as their viewer.
+
+use std::collections::BTreeMap;
+
+use anyhow::Context as _;
+use futures_util::{SinkExt, StreamExt};
+use serde_json::{json, Value};
+use tokio::net::TcpStream;
+use tokio_tungstenite::tungstenite::client::IntoClientRequest;
+use tokio_tungstenite::tungstenite::Message;
+use tokio_tungstenite::WebSocketStream;
+
+/// The SDK's WebSocket subprotocol.
+pub const SUBPROTOCOL: &str = "foxglove.sdk.v1";
+
+/// The topics each match gets (`/match/{id}/{topic}`), the log created last.
+pub const TOPICS: [&str; 7] = ["scene", "tf", "state", "score", "events", "stats", "log"];
+
+/// One viewer connection.
+pub struct Viewer {
+    ws: WebSocketStream<TcpStream>,
+}
+
+impl Viewer {
+    /// Connects to a live server at `addr` (`HOST:PORT`) with the SDK's
+    /// subprotocol; fails if the server does not speak it.
+    pub async fn connect(addr: &str) -> anyhow::Result<Viewer> {
+        let mut req = format!("ws://{addr}").into_client_request()?;
+        req.headers_mut()
+            .insert("sec-websocket-protocol", SUBPROTOCOL.parse()?);
+        let tcp = TcpStream::connect(addr)
+            .await
+            .with_context(|| format!("connecting to the live server {addr}"))?;
+        let (ws, resp) = tokio_tungstenite::client_async(req, tcp)
+            .await
+            .context("the WebSocket handshake")?;
+        let proto = resp.headers().get("sec-websocket-protocol");
+        anyhow::ensure!(
+            proto.is_some_and(|p| p == SUBPROTOCOL),
+            "the live server answered with subprotocol {proto:?}, not {SUBPROTOCOL}"
+        );
+        Ok(Viewer { ws })
+    }
+
+    /// Reads control messages until all of match `id`'s channels are
+    /// advertised; returns every channel advertised so far, by topic.
+    ///
+    /// A match's channels are created one after the other, and the SDK may
+    /// advertise one a moment before it takes subscriptions for it: this
+    /// waits for the whole set (the log channel is created last).
+    pub async fn advertised(&mut self, id: u64) -> anyhow::Result<BTreeMap<String, Value>> {
+        let all = TOPICS.map(|t| format!("/match/{id}/{t}"));
+        let mut channels = BTreeMap::new();
+        while !all.iter().all(|t| channels.contains_key(t)) {
+            let msg = self
+                .ws
+                .next()
+                .await
+                .context("the live server closed before advertising the match")??;
+            if let Message::Text(t) = msg {
+                let v: Value = serde_json::from_str(&t)?;
+                if v["op"] == "advertise" {
+                    for c in v["channels"].as_array().into_iter().flatten() {
+                        if let Some(topic) = c["topic"].as_str() {
+                            channels.insert(topic.to_string(), c.clone());
+                        }
+                    }
+                }
+            }
+        }
+        Ok(channels)
+    }
+
+    /// Subscribes to `channels` (advertised channels, as
+    /// [`Viewer::advertised`] returns them), each under its subscription id.
+    pub async fn subscribe(&mut self, channels: &[(u32, &Value)]) -> anyhow::Result<()> {
+        let subs: Vec<Value> = channels
+            .iter()
+            .map(|(sub, c)| json!({"id": sub, "channelId": c["id"]}))
+            .collect();
+        let msg = json!({"op": "subscribe", "subscriptions": subs});
+        self.ws.send(Message::Text(msg.to_string().into())).await?;
+        Ok(())
+    }
+
+    /// The next message data frame as (subscription id, payload bytes), or
+    /// `None` once the connection is closed or broken. Control messages are
+    /// skipped.
+    pub async fn next_raw(&mut self) -> Option<(u32, Vec<u8>)> {
+        loop {
+            match self.ws.next().await? {
+                // Opcode 1 (message data): subscription id, log time, payload.
+                Ok(Message::Binary(b)) if b.len() >= 13 && b[0] == 1 => {
+                    let sub = u32::from_le_bytes([b[1], b[2], b[3], b[4]]);
+                    return Some((sub, b[13..].to_vec()));
+                }
+                Ok(_) => continue,
+                Err(_) => return None,
+            }
+        }
+    }
+
+    /// The next message data frame as (subscription id, payload as JSON).
+    pub async fn next_data(&mut self) -> Option<(u32, Value)> {
+        loop {
+            let (sub, b) = self.next_raw().await?;
+            if let Ok(v) = serde_json::from_slice(&b) {
+                return Some((sub, v));
+            }
+        }
+    }
+
+    /// Closes the connection politely.
+    pub async fn close(mut self) {
+        let _ = self.ws.close(None).await;
+    }
+}
+
+/// The robots (`robot_*` entities) in a scene update, and whether it holds
+/// the ball, the pitch and the scoreboard.
+pub fn scene_contents(scene: &Value) -> SceneContents {
+    let ids: Vec<&str> = scene["entities"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|e| e["id"].as_str())
+        .collect();
+    SceneContents {
+        robots: ids.iter().filter(|i| i.starts_with("robot_")).count(),
+        ball: ids.contains(&"ball"),
+        pitch: ids.contains(&"pitch"),
+        scoreboard: ids.contains(&"scoreboard"),
+    }
+}
+
+/// What [`scene_contents`] found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SceneContents {
+    pub robots: usize,
+    pub ball: bool,
+    pub pitch: bool,
+    pub scoreboard: bool,
+}
