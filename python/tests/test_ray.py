@@ -183,8 +183,9 @@ def test_matches_spread_over_both_nodes(cluster, binary):
         # Two CPUs: blocks of 2, about two a CPU.
         assert default_block_for(6) == 2
         spec = EvalSpec("scripted", "idle", matches=6, seed=3, both_sides=True, minutes=0.2)
-        played = run_eval_blocks(spec)
-        assert [(b.first, b.matches) for b in played] == [(0, 2), (2, 2), (4, 2)]
+        # Six one-match blocks: with three, SPREAD once put all on one node.
+        played = run_eval_blocks(spec, block=1)
+        assert [(b.first, b.matches) for b in played] == [(i, 1) for i in range(6)]
         assert {b.node for b in played} == {n["NodeID"] for n in alive}
         doc = json.loads(merge_blocks(played, binary=binary))
         want = binary_eval(binary, "--blue", "scripted", "--red", "idle", "--matches", "6", "--seed", "3",
