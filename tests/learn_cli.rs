@@ -9,7 +9,6 @@ mod common;
 use common::naosoccer;
 
 use std::path::PathBuf;
-use std::process::Command;
 
 fn dir(name: &str) -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
@@ -417,7 +416,7 @@ fn training_commands_without_the_feature_say_what_to_run() {
 #[cfg(not(feature = "train"))]
 #[test]
 fn the_default_build_links_no_libtorch() {
-    let Ok(out) = Command::new("ldd")
+    let Ok(out) = std::process::Command::new("ldd")
         .arg(env!("CARGO_BIN_EXE_naosoccer"))
         .output()
     else {

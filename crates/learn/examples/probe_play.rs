@@ -53,7 +53,7 @@ fn kind(o: &Observation, in_reach: bool) -> usize {
 fn pass_on(o: &Observation) -> bool {
     let me = o.me();
     let (s, c) = me.heading.sin_cos();
-    let mine = o.player as usize % PLAYERS_PER_TEAM;
+    let mine = o.player.index();
     o.own.iter().enumerate().any(|(p, m)| {
         if p == mine || m.fallen {
             return false;
@@ -76,7 +76,7 @@ fn pass_on(o: &Observation) -> bool {
 fn mate_cones(o: &Observation) -> [bool; 3] {
     let me = o.me();
     let (s, c) = me.heading.sin_cos();
-    let mine = o.player as usize % PLAYERS_PER_TEAM;
+    let mine = o.player.index();
     let mut hit = [false; 3];
     for (p, m) in o.own.iter().enumerate() {
         if p == mine || m.fallen {
