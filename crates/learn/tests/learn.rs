@@ -411,7 +411,8 @@ fn issue_13_refreshed_self_play_snapshots_sample_like_the_learner() {
         "and holds its decisions"
     );
     let rows = probe_rows();
-    let x = tch::Tensor::from_slice(&rows).view([16, OBS_DIM as i64]);
+    // Rows are OBS_DIM wide; the network reads its layout's prefix.
+    let x = naosoccer_learn::ppo::rows_tensor(&rows, 16, OBS_DIM, run_scale(&cfg).dim());
     let mut want = vec![0.0f32; 16 * 5];
     live.net.logits(&x).copy_data(&mut want, 16 * 5);
     // The snapshot plays through the torch-free forward pass: the live
