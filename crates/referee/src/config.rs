@@ -159,6 +159,10 @@ pub struct RewardConfig {
     pub support: f32,
     pub support_ahead: f32,
     pub support_side: f32,
+    /// How many robots of a team, besides its chaser, `support` pays: the
+    /// ones nearest the ball. The rest get neither `approach` nor `support`
+    /// (only `progress`). 3 (all of them) by default.
+    pub support_robots: u32,
     /// The discount of the shaping terms (set it to the learner's per-tick
     /// gamma, which keeps them policy-invariant, Ng et al. 1999); 1 by default.
     pub shaping_gamma: f32,
@@ -184,6 +188,7 @@ impl Default for RewardConfig {
             support: 0.0,
             support_ahead: 1.5,
             support_side: 1.0,
+            support_robots: 3,
             shaping_gamma: 1.0,
             pass: 0.0,
             pass_min_distance: 1.0,

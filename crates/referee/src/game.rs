@@ -221,8 +221,9 @@ impl Match {
     /// Each robot's shaping potential in the current state: `progress`
     /// times the ball's x in its team's frame minus `approach` times its
     /// distance to the ball; with `support`, the approach term only for its
-    /// team's chaser and `support` times the distance to its support spot
-    /// for the others (`RewardConfig::support`).
+    /// team's chaser, `support` times the distance to its support spot for
+    /// the `support_robots` next nearest, and neither for the rest
+    /// (`RewardConfig::support`).
     fn potentials(&self) -> [f32; ROBOTS] {
         let w = &self.cfg.reward;
         let snap = self.sim.snapshot();
@@ -237,13 +238,14 @@ impl Match {
                 w.progress * sx * bx - w.approach * dist[i]
             });
         }
-        // Each team's chaser: its robot nearest the ball (the lower index on a tie).
-        let chaser = |team: usize| {
+        // Each robot's rank in its team by distance to the ball (the lower
+        // index first on a tie): 0 is the team's chaser.
+        let rank = |i: usize| {
+            let team = i / PLAYERS_PER_TEAM;
             (team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM)
-                .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
-                .unwrap_or(team * PLAYERS_PER_TEAM)
+                .filter(|&j| dist[j] < dist[i] || (dist[j] == dist[i] && j < i))
+                .count()
         };
-        let chasers = [chaser(0), chaser(1)];
         let (lx, ly) = (
             (self.field.half_length - 0.3).max(0.0),
             (self.field.half_width - 0.3).max(0.0),
@@ -252,8 +254,10 @@ impl Match {
             let team = i / PLAYERS_PER_TEAM;
             let sx = if team == 0 { 1.0 } else { -1.0 };
             let progress = w.progress * sx * bx;
-            if i == chasers[team] {
-                return progress - w.approach * dist[i];
+            match rank(i) {
+                0 => return progress - w.approach * dist[i],
+                r if r > w.support_robots as usize => return progress,
+                _ => {}
             }
             let r = &snap.robots[i];
             let side = if r.pos[1] >= by { 1.0 } else { -1.0 };

@@ -654,70 +654,89 @@ fn progress_reward_follows_the_ball_toward_the_goal() {
 }
 
 /// `reward.support`: each team's robot nearest the ball (its chaser) is paid
-/// `approach` for closing in; the others are paid `support` for closing on
-/// their support spot (ahead of the ball toward the opponent goal, to the
-/// ball's side they are on, kept inside the field). Potential-based: with
-/// `shaping_gamma` g the tick's reward is `g * phi' - phi`.
+/// `approach` for closing in; the `support_robots` next nearest are paid
+/// `support` for closing on their support spot (ahead of the ball toward the
+/// opponent goal, to the ball's side they are on, kept inside the field);
+/// the rest get neither. Potential-based: with `shaping_gamma` g the tick's
+/// reward is `g * phi' - phi`.
 #[test]
 fn support_shaping_pays_the_chaser_for_the_ball_and_the_others_for_their_spots() {
-    let mut cfg = MatchConfig::default();
-    cfg.reward.goal = 0.0;
-    cfg.reward.close = 0.0;
-    cfg.reward.control = 0.0;
-    cfg.reward.opponent_control = 0.0;
-    cfg.reward.approach = 1.0;
-    cfg.reward.support = 2.0;
-    cfg.reward.shaping_gamma = 0.5;
-    let mut m = Match::new(&cfg, 4).unwrap();
-    clear_the_pitch(&mut m);
-    m.sim_mut().place_ball(0.5, 0.0);
-    // Blue: player 1 is the chaser; player 2 stands above the ball, player 3
-    // below it; player 0 in front of its own goal, above the ball.
-    m.sim_mut().place_robot(0, -2.5, 0.2, 0.0);
-    m.sim_mut().place_robot(1, 0.2, 0.0, 0.0);
-    m.sim_mut().place_robot(2, 1.0, 1.5, 0.0);
-    m.sim_mut().place_robot(3, 0.0, -1.5, 0.0);
-    // Red (attacking -x): its chaser is player 3, the nearest of its robots.
-    m.sim_mut().place_robot(7, 0.9, 0.3, std::f32::consts::PI);
-    let (lx, ly) = (2.7f32, 1.95f32);
-    let phi = |s: &naosoccer_sim::Snapshot| -> [f32; ROBOTS] {
-        let [bx, by, _] = s.ball.pos;
-        let d = |i: usize, x: f32, y: f32| (x - s.robots[i].pos[0]).hypot(y - s.robots[i].pos[1]);
-        std::array::from_fn(|i| {
-            let team = i / 4;
-            let chaser = (team * 4..team * 4 + 4)
-                .min_by(|&a, &b| d(a, bx, by).total_cmp(&d(b, bx, by)))
-                .unwrap();
-            if i == chaser {
-                return -d(i, bx, by);
-            }
-            let sx = if team == 0 { 1.0 } else { -1.0 };
-            let side = if s.robots[i].pos[1] >= by { 1.0 } else { -1.0 };
-            let spot = ((bx + sx * 1.5).clamp(-lx, lx), (by + side).clamp(-ly, ly));
-            -2.0 * d(i, spot.0, spot.1)
-        })
-    };
-    let before = phi(m.sim().snapshot());
-    let mut physics = [0.0; ROBOTS];
-    m.step_observed(&STAY, |sim| physics = phi(sim.snapshot()));
-    let blue = m.rewards(Team::Blue);
-    let red = m.rewards(Team::Red);
-    for i in 0..ROBOTS {
-        let got = if i < 4 { blue[i] } else { red[i - 4] };
-        let want = 0.5 * physics[i] - before[i];
-        assert!((got - want).abs() < 1e-4, "robot {i}: {got} vs {want}");
+    for supporters in [3usize, 1] {
+        let mut cfg = MatchConfig::default();
+        cfg.reward.goal = 0.0;
+        cfg.reward.close = 0.0;
+        cfg.reward.control = 0.0;
+        cfg.reward.opponent_control = 0.0;
+        cfg.reward.approach = 1.0;
+        cfg.reward.support = 2.0;
+        cfg.reward.support_robots = supporters as u32;
+        cfg.reward.shaping_gamma = 0.5;
+        let mut m = Match::new(&cfg, 4).unwrap();
+        clear_the_pitch(&mut m);
+        m.sim_mut().place_ball(0.5, 0.0);
+        // Blue: player 1 is the chaser; player 2 stands above the ball (the
+        // next nearest), player 3 below it; player 0 in front of its own
+        // goal, above the ball (the farthest).
+        m.sim_mut().place_robot(0, -2.5, 0.2, 0.0);
+        m.sim_mut().place_robot(1, 0.2, 0.0, 0.0);
+        m.sim_mut().place_robot(2, 1.0, 1.5, 0.0);
+        m.sim_mut().place_robot(3, 0.0, -1.8, 0.0);
+        // Red (attacking -x): its chaser is player 3, the nearest of its robots.
+        m.sim_mut().place_robot(7, 0.9, 0.3, std::f32::consts::PI);
+        let (lx, ly) = (2.7f32, 1.95f32);
+        let phi = |s: &naosoccer_sim::Snapshot| -> [f32; ROBOTS] {
+            let [bx, by, _] = s.ball.pos;
+            let d =
+                |i: usize, x: f32, y: f32| (x - s.robots[i].pos[0]).hypot(y - s.robots[i].pos[1]);
+            std::array::from_fn(|i| {
+                let team = i / 4;
+                let mut order: Vec<usize> = (team * 4..team * 4 + 4).collect();
+                order.sort_by(|&a, &b| d(a, bx, by).total_cmp(&d(b, bx, by)));
+                let rank = order.iter().position(|&j| j == i).unwrap();
+                if rank == 0 {
+                    return -d(i, bx, by);
+                }
+                if rank > supporters {
+                    return 0.0;
+                }
+                let sx = if team == 0 { 1.0 } else { -1.0 };
+                let side = if s.robots[i].pos[1] >= by { 1.0 } else { -1.0 };
+                let spot = ((bx + sx * 1.5).clamp(-lx, lx), (by + side).clamp(-ly, ly));
+                -2.0 * d(i, spot.0, spot.1)
+            })
+        };
+        let before = phi(m.sim().snapshot());
+        let mut physics = [0.0; ROBOTS];
+        m.step_observed(&STAY, |sim| physics = phi(sim.snapshot()));
+        let blue = m.rewards(Team::Blue);
+        let red = m.rewards(Team::Red);
+        for i in 0..ROBOTS {
+            let got = if i < 4 { blue[i] } else { red[i - 4] };
+            let want = 0.5 * physics[i] - before[i];
+            assert!(
+                (got - want).abs() < 1e-4,
+                "{supporters} supporters, robot {i}: {got} vs {want}"
+            );
+        }
+        // The chaser's potential is its distance to the ball (0.3 m), the
+        // supporters' twice the distance to their spots: player 2's spot
+        // (2, 1) is 1.0 m ahead of it and 0.5 m to its right.
+        assert!((before[1] + 0.3).abs() < 0.02, "{}", before[1]);
+        assert!(
+            (before[2] + 2.0 * 1.0f32.hypot(0.5)).abs() < 0.02,
+            "{}",
+            before[2]
+        );
+        if supporters == 3 {
+            // Player 0's spot is the same as player 2's, far away.
+            assert!(before[0] < -8.0, "{}", before[0]);
+            assert!(before[3] < -1.0, "{}", before[3]);
+        } else {
+            // With one supporter, players 3 and 0 get no shaping at all.
+            assert_eq!((before[0], before[3]), (0.0, 0.0));
+            assert_eq!((blue[0], blue[3]), (0.0, 0.0));
+        }
     }
-    // The chaser's potential is its distance to the ball (0.3 m), the
-    // others' twice the distance to their spots: player 2's spot (2, 1) is
-    // 1.0 m ahead of it and 0.5 m to its right; player 0's spot is the
-    // same, far away.
-    assert!((before[1] + 0.3).abs() < 0.02, "{}", before[1]);
-    assert!(
-        (before[2] + 2.0 * 1.0f32.hypot(0.5)).abs() < 0.02,
-        "{}",
-        before[2]
-    );
-    assert!(before[0] < -8.0, "{}", before[0]);
 }
 
 /// Issue 13: the shaping terms are potential-based, outside the log, and
