@@ -95,6 +95,17 @@ fn mate_cones(o: &Observation) -> [bool; 3] {
     hit
 }
 
+/// The ticks counted in `row` and each action's share of them, as text.
+fn action_shares(row: &[u64; NAMES.len()]) -> (u64, String) {
+    let n: u64 = row.iter().sum();
+    let shares: Vec<String> = row
+        .iter()
+        .zip(NAMES)
+        .map(|(c, name)| format!("{name} {:.2}", *c as f64 / n.max(1) as f64))
+        .collect();
+    (n, shares.join(", "))
+}
+
 fn main() {
     let mut args = std::env::args().skip(1);
     let spec = args
@@ -148,24 +159,11 @@ fn main() {
     }
     println!("{spec} as blue against {opponent}, {matches} matches: actions taken by free robots");
     for (k, row) in counts.iter().enumerate() {
-        let n: u64 = row.iter().sum();
-        let shares: Vec<String> = row
-            .iter()
-            .zip(NAMES)
-            .map(|(c, name)| format!("{name} {:.2}", *c as f64 / n.max(1) as f64))
-            .collect();
-        println!("  {} ({n} ticks): {}", KINDS[k], shares.join(", "));
+        let (n, shares) = action_shares(row);
+        println!("  {} ({n} ticks): {shares}", KINDS[k]);
     }
-    let n: u64 = pass_counts.iter().sum();
-    let shares: Vec<String> = pass_counts
-        .iter()
-        .zip(NAMES)
-        .map(|(c, name)| format!("{name} {:.2}", *c as f64 / n.max(1) as f64))
-        .collect();
-    println!(
-        "  ball in kick reach, a teammate open 1-3 m ahead (+-15 deg) ({n} ticks): {}",
-        shares.join(", ")
-    );
+    let (n, shares) = action_shares(&pass_counts);
+    println!("  ball in kick reach, a teammate open 1-3 m ahead (+-15 deg) ({n} ticks): {shares}");
     let share = |k: usize| cone_ticks[k] as f64 / reach_ticks.max(1) as f64;
     println!(
         "  of {reach_ticks} ticks with the ball in reach, a standing teammate 1-4 m away within \

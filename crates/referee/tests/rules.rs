@@ -653,6 +653,14 @@ fn progress_reward_follows_the_ball_toward_the_goal() {
     assert_eq!((blue, red), ([0.0; 4], [0.0; 4]), "off by default");
 }
 
+/// Turns off every reward term but the shaping (goal, closeness, control).
+fn shaping_only(cfg: &mut MatchConfig) {
+    cfg.reward.goal = 0.0;
+    cfg.reward.close = 0.0;
+    cfg.reward.control = 0.0;
+    cfg.reward.opponent_control = 0.0;
+}
+
 /// `reward.support`: each team's robot nearest the ball (its chaser) is paid
 /// `approach` for closing in; the `support_robots` next nearest are paid
 /// `support` for closing on their support spot (ahead of the ball toward the
@@ -663,10 +671,7 @@ fn progress_reward_follows_the_ball_toward_the_goal() {
 fn support_shaping_pays_the_chaser_for_the_ball_and_the_others_for_their_spots() {
     for supporters in [3usize, 1] {
         let mut cfg = MatchConfig::default();
-        cfg.reward.goal = 0.0;
-        cfg.reward.close = 0.0;
-        cfg.reward.control = 0.0;
-        cfg.reward.opponent_control = 0.0;
+        shaping_only(&mut cfg);
         cfg.reward.approach = 1.0;
         cfg.reward.support = 2.0;
         cfg.reward.support_robots = supporters as u32;
@@ -751,10 +756,7 @@ fn issue_13_shaping_telescopes_between_restarts() {
         minutes: 2.0,
         ..MatchConfig::default()
     };
-    cfg.reward.goal = 0.0;
-    cfg.reward.close = 0.0;
-    cfg.reward.control = 0.0;
-    cfg.reward.opponent_control = 0.0;
+    shaping_only(&mut cfg);
     cfg.reward.progress = 1.0;
     cfg.reward.approach = 0.5;
     let mut m = Match::new(&cfg, 9).unwrap();
