@@ -8,8 +8,11 @@
 //!   robots flattened into one batch; built-in, frozen or self-play opponents.
 //! - [`ppo`], [`dqn`]: the two algorithms as the paper describes them (PPO
 //!   also with a CleanRL preset).
-//! - [`schedule`]: opponent curricula and the pool of past snapshots.
-//! - [`train`]: training runs (config, metrics CSV, safetensors checkpoints).
+//! - [`config`]: a training run's configuration (its `config.json`).
+//! - [`schedule`]: opponent curricula, as written on the command line.
+//! - [`schedule_runner`]: a schedule played: its stages and the pool of past
+//!   snapshots.
+//! - [`train`]: training runs (metrics CSV, safetensors checkpoints, resume).
 //! - [`policy`]: the trainer's networks as players (self-play snapshots,
 //!   frozen opponents), through `naosoccer-policy`'s forward pass.
 //! - [`eval`]: many matches between two teams; Table I with 95% CIs.
@@ -19,6 +22,7 @@
 //! match configuration.
 
 pub mod adam;
+pub mod config;
 pub mod dqn;
 pub mod env;
 mod error;
@@ -27,10 +31,12 @@ pub mod plot;
 pub mod policy;
 pub mod ppo;
 pub mod schedule;
+pub mod schedule_runner;
 pub mod train;
 
+pub use config::{Algo, OpponentSpec, TrainConfig};
 pub use error::LearnError;
 pub use naosoccer_policy::{eval, obs};
 pub use naosoccer_policy::{load_policy, load_policy_for_match, ActMode, LearnedPolicy};
 pub use obs::{ObsScale, OBS_DIM, OBS_VERSION, OBS_VERSION_LATEST};
-pub use train::{train, Algo, OpponentSpec, TrainConfig};
+pub use train::train;

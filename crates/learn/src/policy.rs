@@ -2,7 +2,8 @@
 //! `naosoccer-policy`'s forward pass (plain Rust, no libtorch): a frozen
 //! opponent loaded from a run directory, and a self-play or pool snapshot of
 //! the live networks, whose variables are copied out of their `VarStore`s.
-//! This module only converts; how a team acts is `naosoccer_policy::learned`.
+//! This module only converts and sets how a snapshot plays; how a team acts
+//! is `naosoccer_policy::learned`.
 
 use std::path::Path;
 
@@ -13,9 +14,9 @@ pub use naosoccer_policy::actions::{is_free, sample_uniform, Hold};
 pub use naosoccer_policy::learned::{resolve_run, ActMode, LearnedPolicy, PlayConfig};
 pub use naosoccer_policy::{load_policy, load_policy_for_match, Weights};
 
+use crate::config::{run_scale, Algo, TrainConfig};
 use crate::dqn::QNet;
 use crate::ppo::ActorCritic;
-use crate::train::{run_scale, Algo, TrainConfig};
 use crate::LearnError;
 
 /// What playing reads of a training configuration (the fields of its
@@ -78,6 +79,28 @@ pub fn untrained(cfg: &TrainConfig, name: String) -> Result<LearnedPolicy, Learn
             from_stores(cfg, &stores, name)
         }
     }
+}
+
+/// A self-play opponent: the run's networks (fresh when `weights` is `None`,
+/// else a copy of the live training networks). It plays as the learner's
+/// team would (`ppo:` samples, `dqn:` is greedy), its draws keyed by each
+/// match's seed, and under the decision-level MDP it holds its decisions as
+/// a loaded team does. Every snapshot, the first and each refresh, is built
+/// here (issue 13, cause 1: refreshed snapshots used to play greedily).
+pub fn self_play_snapshot(
+    cfg: &TrainConfig,
+    weights: Option<&[&tch::nn::VarStore]>,
+) -> Result<LearnedPolicy, LearnError> {
+    let mut p = match weights {
+        Some(w) => from_stores(cfg, w, "self-play".into())?,
+        None => untrained(cfg, "self-play".into())?,
+    };
+    p.set_mode(match cfg.algo {
+        Algo::Ppo => ActMode::Sample,
+        Algo::Dqn => ActMode::Greedy,
+    });
+    p.set_match_seed(cfg.seed);
+    Ok(p)
 }
 
 /// Saves several stores into one safetensors file (their variable names are

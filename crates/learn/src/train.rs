@@ -15,124 +15,23 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use naosoccer_client::PolicyKind;
-use naosoccer_referee::MatchConfig;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::dqn::{epsilon_greedy, Dqn, DqnConfig, NStep};
+use crate::dqn::{epsilon_greedy, Dqn, NStep};
 use crate::env::{EnvConfig, Episode, Opponent, VecEnv};
-use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION, OBS_VERSION_LATEST};
-use crate::policy::{save_stores, ActMode, Hold, LearnedPolicy};
-use crate::ppo::{Ppo, PpoConfig, Rollout, Transitions, ACTIONS};
-use crate::schedule::ScheduleRunner;
+use crate::obs::{layout_dim, OBS_DIM, OBS_VERSION_LATEST};
+use crate::policy::{save_stores, Hold, LearnedPolicy};
+use crate::ppo::{Ppo, Rollout, Transitions, ACTIONS};
+use crate::schedule_runner::ScheduleRunner;
 use crate::LearnError;
 
-pub use naosoccer_policy::Algo;
-
-/// Who the learner plays against during training.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum OpponentSpec {
-    /// A built-in policy by spec: `scripted`, `scripted:KEY=VAL,...`,
-    /// `random`, `idle`.
-    Builtin(String),
-    /// A frozen trained team, `ppo:DIR` or `dqn:DIR`.
-    Frozen(String),
-    /// The learner's own snapshot, refreshed every `every` transitions.
-    SelfPlay { every: u64 },
-    /// A curriculum of opponent mixes with a pool of past snapshots (PPO).
-    Schedule(crate::schedule::Schedule),
-}
-
-impl std::str::FromStr for OpponentSpec {
-    type Err = String;
-    /// `scripted` | `random` | `idle` | `ppo:DIR` | `dqn:DIR` | `self-play[:N]`
-    /// | `curriculum` | `schedule:STAGES` (see [`crate::schedule`]).
-    fn from_str(s: &str) -> Result<Self, String> {
-        if s == "curriculum" {
-            return Ok(OpponentSpec::Schedule(
-                crate::schedule::Schedule::curriculum(),
-            ));
-        }
-        if let Some(rest) = s.strip_prefix("schedule:") {
-            return crate::schedule::Schedule::parse(rest).map(OpponentSpec::Schedule);
-        }
-        if let Some(rest) = s.strip_prefix("self-play") {
-            let every = match rest.strip_prefix(':') {
-                Some(n) => n
-                    .parse()
-                    .map_err(|_| format!("self-play:N needs a number of transitions, got {n:?}"))?,
-                None if rest.is_empty() => 100_000,
-                None => return Err(format!("unknown opponent {s:?}")),
-            };
-            return Ok(OpponentSpec::SelfPlay { every });
-        }
-        if s.starts_with("ppo:") || s.starts_with("dqn:") {
-            return Ok(OpponentSpec::Frozen(s.to_string()));
-        }
-        // Saved as the spec that spells out a scripted variant's parameters,
-        // so config.json does not depend on a TOML file staying as it was.
-        let kind = s.parse::<PolicyKind>().map_err(|e| {
-            format!("{e}; or ppo:DIR, dqn:DIR, self-play[:N], curriculum, schedule:...")
-        })?;
-        Ok(OpponentSpec::Builtin(kind.to_string()))
-    }
-}
-
-/// Everything a training run depends on; saved as `config.json`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TrainConfig {
-    pub algo: Algo,
-    /// Robot transitions (one learning robot, one control tick) to train for.
-    pub steps: u64,
-    pub seed: u64,
-    /// Matches played side by side.
-    pub matches: usize,
-    /// Threads that step matches (the networks use `tch::set_num_threads`).
-    pub threads: usize,
-    /// Players the network controls (all four by default).
-    pub learners: Vec<usize>,
-    /// The built-in policy of own players that do not learn.
-    pub teammates: String,
-    pub opponent: OpponentSpec,
-    /// Transitions between checkpoints.
-    pub checkpoint_every: u64,
-    /// DQN: vectorised steps between metric rows.
-    pub log_every: usize,
-    pub ppo: PpoConfig,
-    pub dqn: DqnConfig,
-    #[serde(rename = "match")]
-    pub match_config: MatchConfig,
-    pub obs_version: u32,
-    pub obs_scale: ObsScale,
-    /// Drill episodes instead of matches (see `env::Drill`).
-    #[serde(default)]
-    pub drill: Option<crate::env::Drill>,
-}
-
-impl TrainConfig {
-    pub fn new(algo: Algo, match_config: MatchConfig) -> TrainConfig {
-        TrainConfig {
-            algo,
-            steps: 1_000_000,
-            seed: 0,
-            matches: 16,
-            threads: 2,
-            learners: vec![0, 1, 2, 3],
-            teammates: "idle".into(),
-            opponent: OpponentSpec::Builtin("scripted".into()),
-            checkpoint_every: 250_000,
-            log_every: 128,
-            ppo: PpoConfig::paper(),
-            dqn: DqnConfig::default(),
-            obs_version: OBS_VERSION,
-            obs_scale: ObsScale::from_config(&match_config),
-            match_config,
-            drill: None,
-        }
-    }
-}
+// The configuration and the self-play snapshot live where the modules that
+// read them can reach them without importing the training loops; these are
+// their historical paths.
+pub use crate::config::{run_scale, Algo, OpponentSpec, TrainConfig};
+pub use crate::policy::self_play_snapshot;
 
 /// One row of `metrics.csv`.
 #[derive(Debug, Clone, PartialEq)]
@@ -358,28 +257,6 @@ fn opponent_for(cfg: &TrainConfig) -> Result<Opponent, LearnError> {
     })
 }
 
-/// A self-play opponent: the run's networks (fresh when `weights` is `None`,
-/// else a copy of the live training networks). It plays as the learner's
-/// team would (`ppo:` samples, `dqn:` is greedy), its draws keyed by each
-/// match's seed, and under the decision-level MDP it holds its decisions as
-/// a loaded team does. Every snapshot, the first and each refresh, is built
-/// here (issue 13, cause 1: refreshed snapshots used to play greedily).
-pub fn self_play_snapshot(
-    cfg: &TrainConfig,
-    weights: Option<&[&tch::nn::VarStore]>,
-) -> Result<LearnedPolicy, LearnError> {
-    let mut p = match weights {
-        Some(w) => crate::policy::from_stores(cfg, w, "self-play".into())?,
-        None => crate::policy::untrained(cfg, "self-play".into())?,
-    };
-    p.set_mode(match cfg.algo {
-        Algo::Ppo => ActMode::Sample,
-        Algo::Dqn => ActMode::Greedy,
-    });
-    p.set_match_seed(cfg.seed);
-    Ok(p)
-}
-
 fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
     let supported = match cfg.algo {
         Algo::Ppo => layout_dim(cfg.obs_version).is_some(),
@@ -417,13 +294,6 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
         env.set_drill(cfg.drill)?;
     }
     Ok(env)
-}
-
-/// The observation encoding of a run: its scale under its layout version.
-pub fn run_scale(cfg: &TrainConfig) -> ObsScale {
-    let mut s = cfg.obs_scale;
-    s.version = cfg.obs_version;
-    s
 }
 
 /// Trains as `cfg` says, writing the run directory `out`. `progress` sees
