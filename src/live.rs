@@ -20,7 +20,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use anyhow::Context as _;
 use foxglove::websocket::{ChannelView, Client, ServerListener};
 use foxglove::{Context, PartialMetadata, RawChannel, Schema, WebSocketServerHandle};
-use naosoccer_proto::{Event, MatchStats};
+use naosoccer_proto::{Event, MatchStats, Tick};
 use naosoccer_record::foxglove as scene;
 use naosoccer_record::StateRecord;
 use naosoccer_referee::Match;
@@ -295,7 +295,7 @@ impl MatchStream {
             let b = &mut self.buf;
             b.clear();
             b.extend_from_slice(br#"{"deletions":[],"entities":["#);
-            if state.tick.is_multiple_of(PITCH_EVERY) && !self.pitch.is_empty() {
+            if state.tick.get().is_multiple_of(PITCH_EVERY) && !self.pitch.is_empty() {
                 b.extend_from_slice(&self.pitch);
                 b.push(b',');
             }
@@ -413,7 +413,7 @@ pub const SERVER_MAX_HZ: f64 = 30.0;
 pub struct LiveObserver {
     stream: MatchStream,
     last_sent: Option<Instant>,
-    last_stats_tick: u64,
+    last_stats_tick: Tick,
 }
 
 impl LiveObserver {
@@ -422,7 +422,7 @@ impl LiveObserver {
         Ok(LiveObserver {
             stream: server.stream(id)?,
             last_sent: None,
-            last_stats_tick: 0,
+            last_stats_tick: Tick::ZERO,
         })
     }
 }

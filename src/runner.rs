@@ -110,7 +110,7 @@ pub fn run_to_end_with(
     let wall_seconds = start.elapsed().as_secs_f64();
     MatchOutcome {
         seed: m.seed(),
-        ticks: m.tick(),
+        ticks: m.tick().get(),
         sim_seconds: m.sim_seconds(),
         wall_seconds,
         score: m.score(),

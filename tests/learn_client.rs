@@ -14,7 +14,7 @@ use naosoccer::runner::{run_to_end_with, MatchOutcome};
 use naosoccer_client::robot::{run_team, TeamRun};
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::msg::{EndReason, MatchEnd, MatchId, Player};
-use naosoccer_proto::{RobotId, Team};
+use naosoccer_proto::{RobotId, Team, Tick};
 use naosoccer_referee::{Match, MatchConfig};
 
 /// A shipped trained team (a sampling PPO team: its draws are keyed by the
@@ -44,7 +44,7 @@ fn trained_blue_in_process(
 
 /// The match a client saw end is the in-process one, bit for bit.
 fn assert_same_match(end: &MatchEnd, out: &MatchOutcome) {
-    assert_eq!(end.tick, out.ticks);
+    assert_eq!(end.tick, Tick::new(out.ticks));
     assert_eq!(end.score, out.score);
     assert_eq!(end.stats, out.stats, "same semantics through the socket");
     assert_eq!(

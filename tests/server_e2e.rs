@@ -7,7 +7,7 @@ use common::server::*;
 use naosoccer_client::robot::{run_team, TeamRun};
 use naosoccer_client::{Client, PolicyKind, Push};
 use naosoccer_proto::msg::{EndReason, ErrorCode, MatchId, Player, PlayerAction, Score};
-use naosoccer_proto::{Action, Team, PLAYERS_PER_TEAM};
+use naosoccer_proto::{Action, Team, Tick, PLAYERS_PER_TEAM};
 
 fn all_players() -> Vec<Player> {
     Player::all().collect()
@@ -71,7 +71,7 @@ async fn eight_robot_clients_match_the_in_process_runner() {
     let hash = format!("{:016x}", out.state_hash);
     for r in blue.iter().chain(&red) {
         assert_eq!(r.end.reason, EndReason::Finished);
-        assert_eq!(r.end.tick, out.ticks);
+        assert_eq!(r.end.tick, Tick::new(out.ticks));
         assert_eq!(r.end.misses.blue, [0; 4]);
         assert_eq!(r.end.misses.red, [0; 4]);
         assert_eq!(r.end.score, score);
@@ -153,7 +153,7 @@ async fn client_disconnecting_mid_match_leaves_its_robots_standing() {
     for expected in 0..5u64 {
         match blue.next_push().await.unwrap() {
             Push::Observation(o) => {
-                assert_eq!(o.tick, expected);
+                assert_eq!(o.tick, Tick::new(expected));
                 assert_eq!(o.observations.len(), PLAYERS_PER_TEAM);
                 blue.send_actions(o.tick, &stay).await.unwrap();
             }
@@ -167,7 +167,7 @@ async fn client_disconnecting_mid_match_leaves_its_robots_standing() {
         in_process(&match_cfg, 42, PolicyKind::Idle, PolicyKind::Scripted);
     for r in &red {
         assert_eq!(r.end.reason, EndReason::Finished);
-        assert_eq!(r.end.tick, ticks);
+        assert_eq!(r.end.tick, Tick::new(ticks));
         assert_eq!(r.end.stats, stats);
         assert_eq!(r.end.score, score);
         assert_eq!(r.end.state_hash, hash, "blue's robots stood");
@@ -202,7 +202,7 @@ async fn silent_client_misses_deadlines_and_the_match_goes_on() {
     let (stats, _, total, hash) =
         in_process(&match_cfg, 42, PolicyKind::Idle, PolicyKind::Scripted);
     for r in &red {
-        assert_eq!(r.end.tick, total);
+        assert_eq!(r.end.tick, Tick::new(total));
         assert_eq!(r.end.misses.blue, [total; 4], "every blue tick missed");
         assert_eq!(r.end.misses.red, [0; 4]);
         assert_eq!(r.end.stats, stats, "missed ticks are played as stay");
@@ -244,13 +244,13 @@ async fn late_action_is_deadline_exceeded() {
     // Wait (by not answering) until tick 2 is observed, then answer tick 0.
     loop {
         match c.next_push().await.unwrap() {
-            Push::Observation(o) if o.tick >= 2 => break,
+            Push::Observation(o) if o.tick >= Tick::new(2) => break,
             Push::Observation(_) => {}
             other => panic!("{other:?}"),
         }
     }
     c.send_actions(
-        0,
+        Tick::ZERO,
         &[PlayerAction {
             player: p0,
             action: Action::Forward,
@@ -263,7 +263,7 @@ async fn late_action_is_deadline_exceeded() {
             Push::Error(e) => {
                 assert_eq!(e.code, ErrorCode::DeadlineExceeded);
                 assert_eq!(e.in_reply_to.as_deref(), Some("action"));
-                assert_eq!(e.tick, Some(0));
+                assert_eq!(e.tick, Some(Tick::ZERO));
                 assert!(!e.fatal);
                 break;
             }
@@ -291,7 +291,7 @@ async fn graceful_shutdown_ends_matches_and_tells_clients() {
         .await
         .unwrap();
     match c.next_push().await.unwrap() {
-        Push::Observation(o) => assert_eq!(o.tick, 0),
+        Push::Observation(o) => assert_eq!(o.tick, Tick::ZERO),
         other => panic!("{other:?}"),
     }
     // Not answering: the tick waits for us (deadline 1 s), so shutdown lands mid-match.
@@ -334,7 +334,7 @@ async fn realtime_match_runs_on_the_clock() {
     let elapsed = started.elapsed();
     let end = &res[0].end;
     assert_eq!(end.reason, EndReason::Finished);
-    assert_eq!(end.tick, u64::from(ticks));
+    assert_eq!(end.tick, Tick::new(u64::from(ticks)));
     // 15 ticks at 10 Hz: at least 1.4 s of wall-clock time.
     assert!(
         elapsed >= std::time::Duration::from_millis(1400),

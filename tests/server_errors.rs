@@ -10,7 +10,7 @@ use naosoccer_proto::msg::{
     ActionMsg, ClientMsg, CreateMatch, ErrorCode, ErrorMsg, Hello, MatchId, MatchState, Mode,
     Player, PlayerAction, ServerMsg, Version,
 };
-use naosoccer_proto::{Action, Team};
+use naosoccer_proto::{Action, Team, Tick};
 use tokio::net::TcpStream;
 
 fn p(n: usize) -> Player {
@@ -261,7 +261,7 @@ async fn taken_slots_and_acting_for_others_are_refused() {
     // Acting for the other team, or for a teammate another connection runs.
     let act = |team, player| {
         ClientMsg::Action(ActionMsg {
-            tick: 0,
+            tick: Tick::ZERO,
             team,
             actions: vec![PlayerAction {
                 player: p(player),
@@ -397,7 +397,7 @@ async fn errors_for_undecodable_fields_are_pairable() {
     c.join(Some(MatchId(1)), Team::Blue, BLUE, &[p(0)])
         .await
         .unwrap();
-    assert!(matches!(c.recv().await.unwrap(), ServerMsg::Observation(o) if o.tick == 0));
+    assert!(matches!(c.recv().await.unwrap(), ServerMsg::Observation(o) if o.tick == Tick::ZERO));
     // (frame, the request type it makes, if it is a request)
     let frames: [(&str, Option<&'static str>); 11] = [
         (
@@ -469,7 +469,7 @@ async fn errors_for_undecodable_fields_are_pairable() {
     assert!(waiting.is_empty());
     // The match still waits on this robot, and plays on once it answers.
     c.send_actions(
-        0,
+        Tick::ZERO,
         &[PlayerAction {
             player: p(0),
             action: Action::Stay,
@@ -477,7 +477,7 @@ async fn errors_for_undecodable_fields_are_pairable() {
     )
     .await
     .unwrap();
-    assert!(matches!(c.recv().await.unwrap(), ServerMsg::Observation(o) if o.tick == 1));
+    assert!(matches!(c.recv().await.unwrap(), ServerMsg::Observation(o) if o.tick == Tick::new(1)));
     assert_eq!(c.ping(4).await.unwrap(), 4);
     server.stop().await;
 }

@@ -12,7 +12,7 @@ use naosoccer_proto::msg::{
     ClientMsg, CreateMatch, EndReason, ErrorCode, ErrorMsg, Hello, MatchEnd, MatchId, MatchInfo,
     MatchState, Player, ServerMsg,
 };
-use naosoccer_proto::{frame, Team};
+use naosoccer_proto::{frame, Team, Tick};
 use naosoccer_referee::Match;
 use naosoccer_server::{Hooks, MatchObserver, ServerConfig, ServerError, TickRecord};
 use std::net::SocketAddr;
@@ -235,7 +235,7 @@ async fn client_that_stops_reading_is_dropped_and_others_play_on() {
         .unwrap();
     let (end, errors) = play_out(&mut good, &joined.players).await;
     assert_eq!(end.reason, EndReason::Finished);
-    assert_eq!(end.tick, joined.total_ticks);
+    assert_eq!(end.tick, Tick::new(joined.total_ticks));
     assert!(errors.is_empty(), "{errors:?}");
 
     // The slow match advances a tick per deadline of the paused clock:
@@ -289,7 +289,7 @@ async fn client_that_stops_reading_is_dropped_and_others_play_on() {
         other => panic!("unexpected {other:?}"),
     }
     assert!(
-        observations <= dropped_at,
+        observations <= dropped_at.get(),
         "{observations} observations, dropped at tick {dropped_at}"
     );
     server.stop().await;
@@ -334,7 +334,7 @@ async fn reconnecting_robot_client_takes_its_robot_back() {
         for (c, pl) in [(&mut keeper, p(1)), (&mut first, p(0))] {
             match c.next_push().await.unwrap() {
                 Push::Observation(o) => {
-                    assert_eq!(o.tick, tick);
+                    assert_eq!(o.tick, Tick::new(tick));
                     c.send_actions(o.tick, &stay(&[pl])).await.unwrap();
                 }
                 other => panic!("{other:?}"),
@@ -354,7 +354,11 @@ async fn reconnecting_robot_client_takes_its_robot_back() {
         .unwrap();
     match again.next_push().await.unwrap() {
         Push::Observation(o) => {
-            assert_eq!(o.tick, 5, "rejoined at the tick the match waits on");
+            assert_eq!(
+                o.tick,
+                Tick::new(5),
+                "rejoined at the tick the match waits on"
+            );
             again.send_actions(o.tick, &stay(&[p(0)])).await.unwrap();
         }
         other => panic!("{other:?}"),
@@ -364,7 +368,7 @@ async fn reconnecting_robot_client_takes_its_robot_back() {
     let (kend, _) = k.await.unwrap();
     assert!(errors.is_empty(), "{errors:?}");
     assert_eq!(end.reason, EndReason::Finished);
-    assert_eq!(end.tick, 40);
+    assert_eq!(end.tick, Tick::new(40));
     assert_eq!(kend, end);
     // Ticks 0..5 answered by the first connection, 6..40 by the second:
     // the only possible miss is tick 5 if the rejoin raced its deadline,
@@ -388,11 +392,16 @@ async fn rejoining_robot_is_not_sent_a_tick_it_already_answered() {
     let mut keeper = join_robot(&server, "keeper", Team::Blue, BLUE, p(1)).await;
     let mut first = join_robot(&server, "robot-0", Team::Blue, BLUE, p(0)).await;
     for c in [&mut keeper, &mut first] {
-        assert!(matches!(c.next_push().await.unwrap(), Push::Observation(o) if o.tick == 0));
+        assert!(
+            matches!(c.next_push().await.unwrap(), Push::Observation(o) if o.tick == Tick::ZERO)
+        );
     }
     // The connection forwards the action to the match before it reads the
     // end of the stream, so the match has it before it hears of the leave.
-    first.send_actions(0, &stay(&[p(0)])).await.unwrap();
+    first
+        .send_actions(Tick::ZERO, &stay(&[p(0)]))
+        .await
+        .unwrap();
     drop(first);
     let mut again = Client::connect(server.addr(), "robot-0 again")
         .await
@@ -404,15 +413,21 @@ async fn rejoining_robot_is_not_sent_a_tick_it_already_answered() {
         .unwrap();
     assert_eq!(
         match_info(&mut again, MatchId(1)).await.tick,
-        0,
+        Tick::ZERO,
         "tick 0 still waits on the keeper"
     );
-    keeper.send_actions(0, &stay(&[p(1)])).await.unwrap();
+    keeper
+        .send_actions(Tick::ZERO, &stay(&[p(1)]))
+        .await
+        .unwrap();
     match again.next_push().await.unwrap() {
-        Push::Observation(o) => assert_eq!(o.tick, 1, "its robot had answered tick 0"),
+        Push::Observation(o) => assert_eq!(o.tick, Tick::new(1), "its robot had answered tick 0"),
         other => panic!("{other:?}"),
     }
-    again.send_actions(1, &stay(&[p(0)])).await.unwrap();
+    again
+        .send_actions(Tick::new(1), &stay(&[p(0)]))
+        .await
+        .unwrap();
     let k = tokio::spawn(async move { play_out(&mut keeper, &[p(1)]).await });
     let (end, errors) = play_out(&mut again, &joined.players).await;
     let (kend, kerrors) = k.await.unwrap();
@@ -421,7 +436,7 @@ async fn rejoining_robot_is_not_sent_a_tick_it_already_answered() {
         "{errors:?} {kerrors:?}"
     );
     assert_eq!(end.reason, EndReason::Finished);
-    assert_eq!(end.tick, 20);
+    assert_eq!(end.tick, Tick::new(20));
     assert_eq!(kend, end);
     assert_eq!(end.misses.blue, [0, 0, 0, 0], "{:?}", end.misses);
     server.stop().await;
@@ -447,7 +462,7 @@ async fn left_robots_count_no_misses_and_a_finished_match_has_no_takers() {
     // Answer ticks 0..3, then leave with tick 3 unanswered.
     loop {
         match leaver.next_push().await.unwrap() {
-            Push::Observation(o) if o.tick < 3 => {
+            Push::Observation(o) if o.tick < Tick::new(3) => {
                 leaver.send_actions(o.tick, &stay(&[p(0)])).await.unwrap()
             }
             Push::Observation(_) => break,
@@ -457,7 +472,7 @@ async fn left_robots_count_no_misses_and_a_finished_match_has_no_takers() {
     assert_eq!(leaver.leave().await.unwrap(), MatchId(1));
     let (mut stayer, (end, errors)) = stayer.await.unwrap();
     assert!(errors.is_empty(), "{errors:?}");
-    assert_eq!(end.tick, 20);
+    assert_eq!(end.tick, Tick::new(20));
     assert_eq!(end.misses.blue, [0; 4], "17 ticks stood, none a miss");
     assert_eq!(end.misses.red, [0; 4]);
     let info = match_info(&mut stayer, MatchId(1)).await;
@@ -567,16 +582,16 @@ async fn a_panicking_match_ends_alone() {
     let ((a_end, a_errors), (b_end, b_errors)) =
         tokio::join!(play_out(&mut a, &players), play_out(&mut b, &players));
     assert_eq!(a_end.reason, EndReason::Internal);
-    assert_eq!(a_end.tick, 20, "ticks 0..20 played, 20 panicked");
+    assert_eq!(a_end.tick, Tick::new(20), "ticks 0..20 played, 20 panicked");
     assert_eq!(a_errors.len(), 1, "{a_errors:?}");
     assert_eq!(a_errors[0].code, ErrorCode::Internal);
     assert_eq!(
         (a_errors[0].in_reply_to.as_deref(), a_errors[0].tick),
-        (Some("action"), Some(20)),
+        (Some("action"), Some(Tick::new(20))),
         "the error is paired with the actions for the tick that failed"
     );
     assert_eq!(b_end.reason, EndReason::Finished);
-    assert_eq!(b_end.tick, 60);
+    assert_eq!(b_end.tick, Tick::new(60));
     assert!(b_errors.is_empty(), "{b_errors:?}");
 
     // The server goes on: the doomed match is listed as finished, and the
@@ -650,7 +665,7 @@ async fn issue_15_panic_at_tick_on_the_wire_injects_nothing() {
         .unwrap();
     let (end, errors) = play_out(&mut c, &all_players()).await;
     assert_eq!(end.reason, EndReason::Finished);
-    assert_eq!(end.tick, 10);
+    assert_eq!(end.tick, Tick::new(10));
     assert!(errors.is_empty(), "{errors:?}");
     server.stop().await;
 }

@@ -123,7 +123,7 @@ fn arbitrary_bytes_get_errors_or_a_close_while_a_match_ticks() {
             loop {
                 match c.next_push().await {
                     Ok(Push::Observation(o)) => {
-                        let _ = tx.send(o.tick);
+                        let _ = tx.send(o.tick.get());
                         c.send_actions(o.tick, &actions).await.unwrap();
                     }
                     Ok(Push::MatchEnd(end)) => return end,

@@ -10,7 +10,7 @@ use naosoccer_proto::msg::{
     CreateMatch, EndReason, ErrorCode, Frame, Hello, MatchEnd, MatchId, MatchState, Pitch, Player,
     PlayerAction, Version, PROTOCOL_NAME,
 };
-use naosoccer_proto::{Action, Event, RobotId, Team};
+use naosoccer_proto::{Action, Event, RobotId, Team, Tick};
 
 fn all_players() -> Vec<Player> {
     Player::all().collect()
@@ -129,7 +129,7 @@ async fn events_arrive_with_their_tick_and_equal_the_in_process_match() {
         |_, _, events| expected.extend_from_slice(events),
     )
     .unwrap();
-    assert_eq!(end.tick, out.ticks);
+    assert_eq!(end.tick, Tick::new(out.ticks));
     assert_eq!(
         end.state_hash,
         format!("{:016x}", out.state_hash),
@@ -150,7 +150,7 @@ async fn events_arrive_with_their_tick_and_equal_the_in_process_match() {
 
 async fn next_observation_tick(c: &mut Client) -> u64 {
     match c.next_push().await.unwrap() {
-        Push::Observation(o) => o.tick,
+        Push::Observation(o) => o.tick.get(),
         other => panic!("expected an observation, got {other:?}"),
     }
 }
@@ -207,9 +207,9 @@ async fn end_match_ends_a_match_with_match_end_to_every_client() {
         assert_eq!(next_observation_tick(&mut blue).await, t);
         assert_eq!(next_observation_tick(&mut red).await, t);
         if t < 5 {
-            blue.send_actions(t, &stay(&team)).await.unwrap();
+            blue.send_actions(Tick::new(t), &stay(&team)).await.unwrap();
         }
-        red.send_actions(t, &stay(&one)).await.unwrap();
+        red.send_actions(Tick::new(t), &stay(&one)).await.unwrap();
     }
 
     // Wrong token, unknown match: refused, the match goes on.
@@ -223,7 +223,7 @@ async fn end_match_ends_a_match_with_match_end_to_every_client() {
     );
     let info = admin.end_match(ADMIN, MatchId(1)).await.unwrap();
     assert_eq!(info.state, MatchState::Finished);
-    assert_eq!(info.tick, 5, "ended at the tick it waited on");
+    assert_eq!(info.tick, Tick::new(5), "ended at the tick it waited on");
 
     let b = next_match_end(&mut blue).await;
     let r = next_match_end(&mut red).await;
@@ -231,7 +231,7 @@ async fn end_match_ends_a_match_with_match_end_to_every_client() {
     assert_eq!(r.reason, EndReason::Shutdown, "1.1 knows no `ended`");
     for e in [&b, &r] {
         assert_eq!(e.match_id, MatchId(1));
-        assert_eq!(e.tick, 5);
+        assert_eq!(e.tick, Tick::new(5));
         assert_eq!(e.score, info.score);
         assert!(e.events.is_empty(), "observation 5 carried tick 4's events");
     }
@@ -262,9 +262,9 @@ async fn end_match_ends_a_match_with_match_end_to_every_client() {
         .await
         .unwrap();
     let info = admin.end_match(ADMIN, created.match_id).await.unwrap();
-    assert_eq!((info.state, info.tick), (MatchState::Finished, 0));
+    assert_eq!((info.state, info.tick), (MatchState::Finished, Tick::ZERO));
     let end = next_match_end(&mut admin).await;
-    assert_eq!((end.reason, end.tick), (EndReason::Ended, 0));
+    assert_eq!((end.reason, end.tick), (EndReason::Ended, Tick::ZERO));
     server.stop().await;
 }
 
@@ -282,17 +282,20 @@ async fn a_client_joining_mid_match_gets_the_events_of_the_tick_before() {
         .await
         .unwrap();
     assert_eq!(next_observation_tick(&mut blue).await, 0);
-    blue.send_actions(0, &stay(&team)).await.unwrap();
+    blue.send_actions(Tick::ZERO, &stay(&team)).await.unwrap();
     let seen_by_blue = match blue.next_push().await.unwrap() {
         Push::Observation(o) => o,
         other => panic!("{other:?}"),
     };
-    assert_eq!(seen_by_blue.tick, 1);
+    assert_eq!(seen_by_blue.tick, Tick::new(1));
     assert!(
-        seen_by_blue
-            .events
-            .iter()
-            .any(|e| matches!(e, Event::KickOff { tick: 0, .. })),
+        seen_by_blue.events.iter().any(|e| matches!(
+            e,
+            Event::KickOff {
+                tick: Tick::ZERO,
+                ..
+            }
+        )),
         "the start's kick-off comes with tick 0's events: {:?}",
         seen_by_blue.events
     );
@@ -304,7 +307,7 @@ async fn a_client_joining_mid_match_gets_the_events_of_the_tick_before() {
         Push::Observation(o) => o,
         other => panic!("{other:?}"),
     };
-    assert_eq!(first.tick, 1);
+    assert_eq!(first.tick, Tick::new(1));
     assert_eq!(first.events, seen_by_blue.events);
     drop((blue, red));
     server.stop().await;

@@ -11,7 +11,7 @@ use std::io::BufWriter;
 use std::path::Path;
 
 use anyhow::{bail, Context};
-use naosoccer_proto::ROBOTS;
+use naosoccer_proto::{Tick, ROBOTS};
 use naosoccer_record::{Recording, StateRecord};
 
 /// What `render --gif` was asked for.
@@ -36,8 +36,8 @@ pub struct GifSummary {
     pub step: u64,
     pub width: u16,
     pub height: u16,
-    pub first_tick: u64,
-    pub last_tick: u64,
+    pub first_tick: Tick,
+    pub last_tick: Tick,
 }
 
 // The palette. Index 0 is never drawn: it marks unchanged pixels.
@@ -293,16 +293,16 @@ pub fn write_gif(rec: &Recording, out: &Path, opts: GifOptions) -> anyhow::Resul
     };
     let hz = rec.meta.control_hz as f64;
     let step = ((opts.speed * hz / opts.fps as f64).round() as u64).max(1);
-    let first_tick = (opts.from.max(0.0) * hz).round() as u64;
+    let first_tick = Tick::new((opts.from.max(0.0) * hz).round() as u64);
     let last_tick = opts
         .to
-        .map(|t| ((t * hz).round() as u64).min(last.tick))
+        .map(|t| Tick::new((t * hz).round() as u64).min(last.tick))
         .unwrap_or(last.tick);
     if first_tick > last_tick {
         bail!(
             "--from {} s is after the end of the part drawn ({} s)",
             opts.from,
-            last_tick as f64 / hz
+            last_tick.get() as f64 / hz
         );
     }
     let width = opts.width.clamp(120, 4000);

@@ -9,7 +9,7 @@ use clap::Args;
 use naosoccer::live::{LiveServer, MatchStream, Pace};
 use naosoccer::runner::{self, MatchOutcome};
 use naosoccer_client::PolicyKind;
-use naosoccer_proto::{Action, Event, RobotId, Team, TeamStats, ROBOTS};
+use naosoccer_proto::{Action, Event, RobotId, Team, TeamStats, Tick, ROBOTS};
 
 use super::team::TeamSpec;
 use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RecordingSummary};
@@ -100,7 +100,7 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
     let show_progress = std::io::stdout().is_terminal();
-    let mut last_shown = 0;
+    let mut last_shown = Tick::ZERO;
     let mut recording = match &args.record {
         Some(path) => Some(MatchRecording::start(path, &cfg, &args)?),
         None => None,
@@ -189,10 +189,10 @@ impl LiveMatch {
 
     fn tick(&mut self, m: &Match, events: &[Event]) {
         if self.stream.watched() {
-            let with_stats = m.tick().is_multiple_of(10) || m.is_finished();
+            let with_stats = m.tick().get().is_multiple_of(10) || m.is_finished();
             self.stream.tick_of(m, events, with_stats);
         }
-        self.pace.wait(m.tick());
+        self.pace.wait(m.tick().get());
     }
 }
 

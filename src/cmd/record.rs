@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use clap::Args;
-use naosoccer_proto::{Event, Team, ROBOTS};
+use naosoccer_proto::{Event, Team, Tick, ROBOTS};
 use naosoccer_record::{replay, Recording, ReplayOutcome};
 
 use super::animate::{write_gif, GifOptions};
@@ -160,7 +160,7 @@ fn stream_recording(rec: &Recording, addr: &str, args: &ReplayArgs) -> anyhow::R
     let pace = Pace::new(rec.meta.control_hz, args.speed);
     let mut events = rec.events.iter().peekable();
     let mut due = Vec::new();
-    let first = rec.states.first().map_or(0, |s| s.tick);
+    let first = rec.states.first().map_or(Tick::ZERO, |s| s.tick);
     for (i, state) in rec.states.iter().enumerate() {
         due.clear();
         while let Some(e) = events.next_if(|e| e.tick().is_none_or(|t| t <= state.tick)) {
@@ -264,8 +264,8 @@ pub fn render_cmd(args: RenderArgs) -> anyhow::Result<()> {
             s.width,
             s.height,
             s.step,
-            s.first_tick as f64 / hz,
-            s.last_tick as f64 / hz,
+            s.first_tick.get() as f64 / hz,
+            s.last_tick.get() as f64 / hz,
             args.fps
         );
     }

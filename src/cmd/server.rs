@@ -510,7 +510,7 @@ async fn bench_round_watched(
                     };
                     misses += team.iter().sum::<u64>();
                     if i % 2 == 0 {
-                        ticks += r.end.tick;
+                        ticks += r.end.tick.get();
                     }
                 }
             }
@@ -683,5 +683,5 @@ fn in_process_ticks(cfg: &naosoccer_referee::MatchConfig, seed: u64) -> anyhow::
         }
         game.step(&actions);
     }
-    Ok(game.tick())
+    Ok(game.tick().get())
 }

@@ -308,7 +308,7 @@ fn note_end(ctx: &Ctx, end: &naosoccer_proto::msg::MatchEnd, count_ticks: bool) 
     if end.reason == EndReason::Finished {
         if count_ticks {
             t.finished += 1;
-            t.ticks += end.tick;
+            t.ticks += end.tick.get();
         }
     } else {
         *t.other_ends.entry(format!("{:?}", end.reason)).or_default() += 1;

@@ -9,7 +9,7 @@ use naosoccer_proto::msg::{
     ListMatches, MatchEnd, MatchId, MatchInfo, ObservationMsg, Ping, Player, PlayerAction,
     ServerMsg, Welcome, PROTOCOL_NAME, PROTOCOL_VERSION,
 };
-use naosoccer_proto::{Action, Team};
+use naosoccer_proto::{Action, Team, Tick};
 use std::collections::VecDeque;
 use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
 use tokio::net::{TcpStream, ToSocketAddrs};
@@ -252,7 +252,7 @@ impl Client {
     /// Answers tick `tick` with one action per player.
     pub async fn send_actions(
         &mut self,
-        tick: u64,
+        tick: Tick,
         actions: &[PlayerAction],
     ) -> Result<(), ClientError> {
         self.writer

@@ -598,7 +598,7 @@ impl Slot {
             goals_against: ga,
             returns: std::mem::replace(&mut self.returns, vec![0.0; env.learners.len()]),
             stats: self.m.stats(),
-            ticks: self.m.tick(),
+            ticks: self.m.tick().get(),
         });
         self.episode += 1;
         self.m = Match::new(cfg, episode_seed(env.seed, self.index, self.episode))?;

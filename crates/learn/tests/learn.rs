@@ -8,6 +8,7 @@ use naosoccer_client::PolicyKind;
 use naosoccer_learn::env::{EnvConfig, Opponent, VecEnv};
 use naosoccer_learn::train::{train, Algo, OpponentSpec, TrainConfig};
 use naosoccer_learn::{LearnedPolicy, OBS_DIM};
+use naosoccer_proto::Tick;
 use naosoccer_referee::MatchConfig;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -452,14 +453,14 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
     let m = Match::new(&MatchConfig::default(), 1).unwrap();
     let at = |tick: u64, busy: bool, fallen: bool| {
         let mut o = m.observe(Team::Blue, 1);
-        o.tick = tick;
+        o.tick = Tick::new(tick);
         o.own[1].busy = busy;
         o.own[1].fallen = fallen;
         o
     };
     let mut h = Hold::default();
     assert!(h.must_decide(&at(0, false, false)));
-    h.start(0, 0, 3);
+    h.start(0, Tick::ZERO, 3);
     for t in 1..3 {
         assert!(!h.must_decide(&at(t, false, false)), "tick {t} holds");
         assert_eq!(h.held(&at(t, false, false)), 0);
@@ -471,12 +472,12 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
         h.must_decide(&at(5, false, false)),
         "free again, persistence over"
     );
-    h.start(SHOOT, 5, 3);
+    h.start(SHOOT, Tick::new(5), 3);
     assert!(
         h.must_decide(&at(6, false, false)),
         "a shoot holds one tick"
     );
-    h.start(0, 6, 3);
+    h.start(0, Tick::new(6), 3);
     assert!(h.must_decide(&at(0, false, false)), "a new match");
 }
 
@@ -519,7 +520,7 @@ fn team_policies_decide_alike_however_they_are_asked() {
     let mut team = loaded();
     let mut batched = loaded();
     let reach = batched.scale().kick;
-    let mut last: [Option<(Action, u64)>; 4] = [None; 4];
+    let mut last: [Option<(Action, Tick)>; 4] = [None; 4];
     let mut changes = 0;
     for _ in 0..120 {
         let obs: Vec<_> = (0..4).map(|p| m.observe(Team::Blue, p)).collect();

@@ -3,7 +3,7 @@
 //! the inverse-CDF sampler. Training (crates/learn) and play share them, so
 //! a team decides in play exactly as it did in training.
 
-use naosoccer_proto::Observation;
+use naosoccer_proto::{Observation, Tick};
 use serde::{Deserialize, Serialize};
 
 /// Discrete actions, in `proto::Action::from_index` order: forward, turn
@@ -31,9 +31,9 @@ pub struct DecisionConfig {
 /// The uniform number in [0, 1) a sampling robot uses at `tick`: a hash of
 /// the match seed, the robot's team and player and the tick, so it does not
 /// depend on how robots are batched or in which order they are asked.
-pub fn sample_uniform(match_seed: u64, team: usize, player: usize, tick: u64) -> f32 {
+pub fn sample_uniform(match_seed: u64, team: usize, player: usize, tick: Tick) -> f32 {
     let mut z = match_seed ^ 0x6A09_E667_F3BC_C909;
-    for v in [team as u64, player as u64, tick] {
+    for v in [team as u64, player as u64, tick.get()] {
         z = z.wrapping_add(v).wrapping_add(0x9E37_79B9_7F4A_7C15);
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -85,8 +85,8 @@ pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Hold {
     action: usize,
-    until: u64,
-    last_tick: Option<u64>,
+    until: Tick,
+    last_tick: Option<Tick>,
 }
 
 impl Hold {
@@ -113,7 +113,7 @@ impl Hold {
 
     /// Records a decision at `tick`: a movement lasts `persist` ticks, a
     /// `shoot` one (the kick then keeps the robot busy).
-    pub fn start(&mut self, action: usize, tick: u64, persist: u32) {
+    pub fn start(&mut self, action: usize, tick: Tick, persist: u32) {
         self.action = action;
         let ticks = if action == SHOOT {
             1
@@ -161,15 +161,15 @@ mod tests {
     fn draws_are_uniform_and_keyed_by_seed_team_player_and_tick() {
         let mut sum = 0.0f64;
         for t in 0..10_000 {
-            let u = sample_uniform(3, 0, 1, t);
+            let u = sample_uniform(3, 0, 1, Tick::new(t));
             assert!((0.0..1.0).contains(&u));
             sum += f64::from(u);
         }
         assert!((sum / 10_000.0 - 0.5).abs() < 0.02);
-        let u = sample_uniform(3, 0, 1, 5);
-        assert_ne!(u, sample_uniform(4, 0, 1, 5));
-        assert_ne!(u, sample_uniform(3, 1, 1, 5));
-        assert_ne!(u, sample_uniform(3, 0, 2, 5));
-        assert_ne!(u, sample_uniform(3, 0, 1, 6));
+        let u = sample_uniform(3, 0, 1, Tick::new(5));
+        assert_ne!(u, sample_uniform(4, 0, 1, Tick::new(5)));
+        assert_ne!(u, sample_uniform(3, 1, 1, Tick::new(5)));
+        assert_ne!(u, sample_uniform(3, 0, 2, Tick::new(5)));
+        assert_ne!(u, sample_uniform(3, 0, 1, Tick::new(6)));
     }
 }

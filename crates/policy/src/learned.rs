@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use naosoccer_client::Policy;
-use naosoccer_proto::{Action, Observation};
+use naosoccer_proto::{Action, Observation, Tick};
 use serde::{Deserialize, Serialize};
 
 use crate::actions::MASKED_LOGIT;
@@ -414,7 +414,7 @@ impl LearnedPolicy {
         players.clear();
         keys.clear();
         // Rows that decide now: (index into out, hold key, tick).
-        let mut deciding: Vec<(usize, (u64, usize, usize), u64)> = Vec::with_capacity(n);
+        let mut deciding: Vec<(usize, (u64, usize, usize), Tick)> = Vec::with_capacity(n);
         let mut i = 0;
         for &(seed, obs) in teams {
             for o in obs {
@@ -484,7 +484,9 @@ impl LearnedPolicy {
         keys.clear();
         if self.mode != ActMode::Greedy {
             let call = self.calls;
-            keys.extend((0..out.len()).map(|i| sample_uniform(self.match_seed, i, 0, call)));
+            keys.extend(
+                (0..out.len()).map(|i| sample_uniform(self.match_seed, i, 0, Tick::new(call))),
+            );
         }
         self.calls += 1;
         self.act_rows_keyed(obs, players, &keys, out);

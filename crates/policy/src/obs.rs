@@ -405,6 +405,7 @@ impl ObsScale {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use naosoccer_proto::Tick;
     use naosoccer_proto::{BallObs, ScoreObs, Team};
 
     /// An observation-layout table of docs/LEARNING.md: rows `| index | name | ... |`
@@ -494,7 +495,7 @@ mod tests {
             busy: false,
         };
         Observation {
-            tick: 7,
+            tick: Tick::new(7),
             team: Team::Red,
             player: naosoccer_proto::Player::new(2).unwrap(),
             time_left: 100.0,

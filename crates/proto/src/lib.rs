@@ -5,6 +5,10 @@
 //!
 //! Everything a player sees is expressed in its team's frame: the team always
 //! attacks +x, its own goal is at x = -field_length/2.
+//!
+//! Ids and game time are newtypes ([`Team`], [`RobotId`], [`Player`],
+//! [`Tick`]) that read and write as the plain strings and numbers
+//! docs/PROTOCOL.md shows; ids are validated when deserialised.
 
 pub mod frame;
 #[cfg(feature = "tokio")]

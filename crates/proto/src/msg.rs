@@ -12,7 +12,7 @@
 //! unknown `type` deserialises to the `Unknown` variant so that the receiver
 //! can answer it (server) or skip it (client) instead of failing.
 
-use crate::types::{Action, Event, MatchStats, Observation, Team, PLAYERS_PER_TEAM};
+use crate::types::{Action, Event, MatchStats, Observation, Team, Tick, PLAYERS_PER_TEAM};
 // Defined beside the other ids and per-team types; named here too, where
 // the messages that carry them are.
 pub use crate::types::{PerTeam, Player, Score};
@@ -175,7 +175,7 @@ pub struct FrameHead {
     /// `"unknown"` for a type this build does not know.
     pub kind: Option<&'static str>,
     /// The `tick` of an `action`, when it holds a valid tick number.
-    pub tick: Option<u64>,
+    pub tick: Option<Tick>,
 }
 
 impl FrameHead {
@@ -194,7 +194,7 @@ impl FrameHead {
             .find(|k| *k == kind)
             .unwrap_or("unknown");
         let tick = (kind == "action")
-            .then(|| map.get("tick").and_then(|t| t.as_u64()))
+            .then(|| map.get("tick").and_then(|t| t.as_u64()).map(Tick::new))
             .flatten();
         FrameHead {
             kind: Some(kind),
@@ -304,7 +304,7 @@ pub struct PlayerAction {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ActionMsg {
     /// The tick of the observation being answered.
-    pub tick: u64,
+    pub tick: Tick,
     /// If present, must be the joined team.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub team: Option<Team>,
@@ -316,7 +316,7 @@ pub struct ActionMsg {
 #[derive(Debug, Clone, Copy, Serialize)]
 #[serde(tag = "type", rename = "action")]
 pub struct ActionRef<'a> {
-    pub tick: u64,
+    pub tick: Tick,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub team: Option<Team>,
     pub actions: &'a [PlayerAction],
@@ -414,7 +414,7 @@ pub struct MatchInfo {
     /// Control ticks per second of game time.
     pub control_hz: f32,
     /// Ticks played so far, and in the whole match.
-    pub tick: u64,
+    pub tick: Tick,
     pub total_ticks: u64,
     /// Lockstep deadline per tick in milliseconds.
     pub deadline_ms: u64,
@@ -486,7 +486,7 @@ pub enum Frame {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ObservationMsg {
     pub match_id: MatchId,
-    pub tick: u64,
+    pub tick: Tick,
     pub observations: Vec<Observation>,
     /// What the referee saw happen on the tick that led here (`tick - 1`),
     /// each event with the tick it happened on, in the order of
@@ -502,7 +502,7 @@ pub struct ObservationMsg {
 #[serde(tag = "type", rename = "observation")]
 pub struct ObservationRef<'a> {
     pub match_id: MatchId,
-    pub tick: u64,
+    pub tick: Tick,
     pub observations: &'a [Observation],
     pub events: &'a [Event],
 }
@@ -530,7 +530,7 @@ pub struct MatchEnd {
     pub match_id: MatchId,
     pub reason: EndReason,
     /// Ticks played.
-    pub tick: u64,
+    pub tick: Tick,
     pub score: Score,
     pub stats: MatchStats,
     /// Ticks on which a joined robot had no action in time (it stayed).
@@ -622,7 +622,7 @@ pub struct ErrorMsg {
     pub in_reply_to: Option<String>,
     /// For rejected actions: the tick the action named.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tick: Option<u64>,
+    pub tick: Option<Tick>,
 }
 
 impl ErrorMsg {
@@ -683,7 +683,7 @@ mod tests {
 
     fn obs(player: u8) -> Observation {
         Observation {
-            tick: 7,
+            tick: Tick::new(7),
             team: Team::Red,
             player: Player::new(player as usize).unwrap(),
             time_left: 599.3,
@@ -728,21 +728,21 @@ mod tests {
         let observations = vec![obs(0), obs(3)];
         let events = vec![
             crate::types::Event::Kick {
-                tick: 6,
+                tick: Tick::new(6),
                 robot: crate::types::RobotId::new(Team::Red, 2).unwrap(),
                 speed: 2.5,
             },
-            crate::types::Event::HalfTime { tick: 6 },
+            crate::types::Event::HalfTime { tick: Tick::new(6) },
         ];
         let owned = ServerMsg::Observation(ObservationMsg {
             match_id: MatchId(4),
-            tick: 7,
+            tick: Tick::new(7),
             observations: observations.clone(),
             events: events.clone(),
         });
         let borrowed = ObservationRef {
             match_id: MatchId(4),
-            tick: 7,
+            tick: Tick::new(7),
             observations: &observations,
             events: &events,
         };
@@ -759,12 +759,12 @@ mod tests {
             action: Action::TurnLeft,
         }];
         let owned = ClientMsg::Action(ActionMsg {
-            tick: 3,
+            tick: Tick::new(3),
             team: None,
             actions: actions.clone(),
         });
         let borrowed = ActionRef {
-            tick: 3,
+            tick: Tick::new(3),
             team: None,
             actions: &actions,
         };
@@ -796,11 +796,11 @@ mod tests {
     fn unknown_event_kinds_are_read_as_unknown() {
         let owned = ServerMsg::Observation(ObservationMsg {
             match_id: MatchId(4),
-            tick: 7,
+            tick: Tick::new(7),
             observations: vec![obs(1)],
             events: vec![
-                crate::types::Event::HalfTime { tick: 5 },
-                crate::types::Event::End { tick: 6 },
+                crate::types::Event::HalfTime { tick: Tick::new(5) },
+                crate::types::Event::End { tick: Tick::new(6) },
             ],
         });
         let mut v = serde_json::to_value(&owned).unwrap();
@@ -816,9 +816,9 @@ mod tests {
         assert_eq!(
             o.events,
             [
-                Event::HalfTime { tick: 5 },
+                Event::HalfTime { tick: Tick::new(5) },
                 Event::Unknown,
-                Event::End { tick: 6 }
+                Event::End { tick: Tick::new(6) }
             ]
         );
         assert_eq!(o.events[1].tick(), None);
@@ -883,17 +883,17 @@ mod tests {
             (
                 r#"{"type":"action","tick":4,"actions":[{"player":0,"action":"dance"}]}"#,
                 Some("action"),
-                Some(4),
+                Some(Tick::new(4)),
             ),
             (
                 r#"{"type":"action","tick":4,"actions":[{"player":9,"action":"stay"}]}"#,
                 Some("action"),
-                Some(4),
+                Some(Tick::new(4)),
             ),
             (
                 r#"{"type":"action","tick":4,"team":"green","actions":[]}"#,
                 Some("action"),
-                Some(4),
+                Some(Tick::new(4)),
             ),
             (
                 r#"{"type":"action","tick":-1,"actions":[]}"#,
@@ -947,7 +947,7 @@ mod tests {
             ClientMsg::CreateMatch(CreateMatch::default()),
             ClientMsg::Hello(Hello::new("x")),
             ClientMsg::Action(ActionMsg {
-                tick: 9,
+                tick: Tick::new(9),
                 team: None,
                 actions: vec![],
             }),
@@ -962,7 +962,10 @@ mod tests {
             let head = FrameHead::peek(&bytes);
             assert_eq!(head.kind, Some(msg.kind()));
             assert!(ClientMsg::KINDS.contains(&msg.kind()));
-            assert_eq!(head.tick, matches!(msg, ClientMsg::Action(_)).then_some(9));
+            assert_eq!(
+                head.tick,
+                matches!(msg, ClientMsg::Action(_)).then_some(Tick::new(9))
+            );
         }
     }
 

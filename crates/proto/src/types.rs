@@ -1,4 +1,5 @@
-//! Game-level wire types: ids, actions, observations, events, statistics.
+//! Game-level wire types: ids, ticks, actions, observations, events,
+//! statistics.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -164,6 +165,98 @@ impl RobotId {
     }
 }
 
+/// A control tick of a match: 0 is the first observation, and a match of
+/// `total_ticks` ends at tick `total_ticks`. On the wire a plain number
+/// (`serde(transparent)`). Durations in ticks (`total_ticks`, `ticks_left`,
+/// a fall's stand-up time) stay plain integers: a `Tick` plus a count is a
+/// `Tick`, and two ticks subtract to a count.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct Tick(u64);
+
+impl Tick {
+    /// The first tick of a match.
+    pub const ZERO: Tick = Tick(0);
+
+    pub const fn new(n: u64) -> Tick {
+        Tick(n)
+    }
+    /// The tick number.
+    pub const fn get(self) -> u64 {
+        self.0
+    }
+    /// The tick after this one.
+    pub const fn next(self) -> Tick {
+        Tick(self.0 + 1)
+    }
+    /// The tick before this one (`None` at tick 0).
+    pub const fn prev(self) -> Option<Tick> {
+        match self.0.checked_sub(1) {
+            Some(n) => Some(Tick(n)),
+            None => None,
+        }
+    }
+    /// Ticks from `earlier` to this one, 0 if `earlier` is later.
+    pub const fn saturating_since(self, earlier: Tick) -> u64 {
+        self.0.saturating_sub(earlier.0)
+    }
+}
+
+impl From<u64> for Tick {
+    fn from(n: u64) -> Tick {
+        Tick(n)
+    }
+}
+
+impl From<Tick> for u64 {
+    fn from(t: Tick) -> u64 {
+        t.0
+    }
+}
+
+/// A tick some ticks later.
+impl std::ops::Add<u64> for Tick {
+    type Output = Tick;
+    fn add(self, ticks: u64) -> Tick {
+        Tick(self.0 + ticks)
+    }
+}
+
+impl std::ops::AddAssign<u64> for Tick {
+    fn add_assign(&mut self, ticks: u64) {
+        self.0 += ticks;
+    }
+}
+
+/// The ticks between two ticks (`later - earlier`; overflows as `u64` does
+/// when `earlier` is later).
+impl std::ops::Sub for Tick {
+    type Output = u64;
+    fn sub(self, earlier: Tick) -> u64 {
+        self.0 - earlier.0
+    }
+}
+
+/// The tick some ticks earlier (overflows as `u64` does before tick 0).
+impl std::ops::Sub<u64> for Tick {
+    type Output = Tick;
+    fn sub(self, ticks: u64) -> Tick {
+        Tick(self.0 - ticks)
+    }
+}
+
+impl fmt::Debug for Tick {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+impl fmt::Display for Tick {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
 /// One value per team.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub struct PerTeam<T> {
@@ -283,7 +376,7 @@ pub struct ScoreObs {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Observation {
     /// Control tick this observation was taken at (before the action is applied).
-    pub tick: u64,
+    pub tick: Tick,
     pub team: Team,
     /// Which of `own` is the receiving robot (0..=3; a number on the wire).
     pub player: Player,
@@ -380,19 +473,19 @@ impl Observation {
 pub enum Event {
     /// A goal for `team` (scored into the other team's goal).
     Goal {
-        tick: u64,
+        tick: Tick,
         team: Team,
         scorer: Option<RobotId>,
     },
     /// A kick that moved the ball.
     Kick {
-        tick: u64,
+        tick: Tick,
         robot: RobotId,
         speed: f32,
     },
     /// Possession moved between two teammates after a kick by the first.
     Pass {
-        tick: u64,
+        tick: Tick,
         from: RobotId,
         to: RobotId,
         /// How far the ball travelled from the kick to the reception, metres
@@ -401,36 +494,36 @@ pub enum Event {
         distance: f32,
     },
     Fall {
-        tick: u64,
+        tick: Tick,
         robot: RobotId,
     },
     GetUp {
-        tick: u64,
+        tick: Tick,
         robot: RobotId,
     },
     /// The ball left the field; it was put back at (x, y) for the set play
     /// that follows (a `SetPlay` event names it). `last_touch` is the team
     /// whose robot touched it last, if known.
     BallOut {
-        tick: u64,
+        tick: Tick,
         x: f32,
         y: f32,
         last_touch: Option<Team>,
     },
     /// A robot left the field and was reset to its predetermined position.
     RobotOut {
-        tick: u64,
+        tick: Tick,
         robot: RobotId,
     },
     /// Play (re)starts from the centre: at the start and after each goal.
     KickOff {
-        tick: u64,
+        tick: Tick,
         team: Team,
     },
     /// A set play was awarded to `team` with the ball placed at (x, y)
     /// (kick-offs have their own event). Protocol 1.2.
     SetPlay {
-        tick: u64,
+        tick: Tick,
         play: SetPlayKind,
         team: Team,
         x: f32,
@@ -439,11 +532,11 @@ pub enum Event {
     /// The first half is over; the second starts with a kick-off by the team
     /// that did not kick off the first. Protocol 1.2.
     HalfTime {
-        tick: u64,
+        tick: Tick,
     },
     /// The clock ran out.
     End {
-        tick: u64,
+        tick: Tick,
     },
     /// An event of a kind this build does not know: a later server's (a
     /// minor version may add kinds; docs/PROTOCOL.md, "Events"). Read so
@@ -455,7 +548,7 @@ pub enum Event {
 
 impl Event {
     /// The tick the event happened on (`None` for [`Event::Unknown`]).
-    pub fn tick(&self) -> Option<u64> {
+    pub fn tick(&self) -> Option<Tick> {
         Some(match self {
             Event::Goal { tick, .. }
             | Event::Kick { tick, .. }
@@ -507,5 +600,59 @@ impl MatchStats {
     }
     pub fn team_mut(&mut self, team: Team) -> &mut TeamStats {
         self.get_mut(team)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tick is a plain number on the wire, as before it had a type
+    /// (issue 15): the same bytes both ways, and whatever a `u64` reads.
+    #[test]
+    fn issue_15_a_tick_reads_and_writes_as_a_plain_number() {
+        for n in [0, 1, 5999, u64::MAX] {
+            let t = Tick::new(n);
+            assert_eq!(serde_json::to_string(&t).unwrap(), n.to_string());
+            assert_eq!(serde_json::from_str::<Tick>(&n.to_string()).unwrap(), t);
+            assert_eq!(
+                (t.to_string(), format!("{t:?}")),
+                (n.to_string(), n.to_string())
+            );
+        }
+        for bad in ["-1", "1.5", "\"4\"", "null", "18446744073709551616"] {
+            assert!(serde_json::from_str::<Tick>(bad).is_err(), "{bad}");
+        }
+        let e = Event::Fall {
+            tick: Tick::new(7),
+            robot: RobotId::from_index(2).unwrap(),
+        };
+        assert_eq!(
+            serde_json::to_string(&e).unwrap(),
+            r#"{"kind":"fall","tick":7,"robot":2}"#
+        );
+    }
+
+    #[test]
+    fn ticks_add_counts_and_subtract_to_counts() {
+        let t = Tick::new(10);
+        assert_eq!(
+            (t.next(), t + 5, t - 3),
+            (Tick::new(11), Tick::new(15), Tick::new(7))
+        );
+        assert_eq!(Tick::new(15) - t, 5);
+        assert_eq!(
+            (
+                t.saturating_since(Tick::new(12)),
+                t.saturating_since(Tick::ZERO)
+            ),
+            (0, 10)
+        );
+        assert_eq!((Tick::ZERO.prev(), t.prev()), (None, Some(Tick::new(9))));
+        let mut u = t;
+        u += 2;
+        assert_eq!(u64::from(u), 12);
+        assert_eq!(Tick::from(12), u);
+        assert!(Tick::ZERO < t && t.get() == 10);
     }
 }

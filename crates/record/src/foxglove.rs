@@ -334,6 +334,7 @@ pub fn write_transforms(out: &mut Vec<u8>, ns: u64, s: &StateRecord) {
 mod tests {
     use super::*;
     use crate::messages::{BallRecord, ScoreRecord};
+    use naosoccer_proto::Tick;
 
     fn state(rotation: [f32; 4]) -> StateRecord {
         let robot = crate::messages::RobotRecord {
@@ -346,7 +347,7 @@ mod tests {
             fallen: true,
         };
         StateRecord {
-            tick: 3,
+            tick: Tick::new(3),
             time: 0.3,
             score: ScoreRecord { blue: 0, red: 0 },
             possession: None,

@@ -1,6 +1,6 @@
 //! The JSON messages of the naosoccer channels (see docs/RECORDINGS.md).
 
-use naosoccer_proto::{Action, MatchStats, RobotId, ROBOTS};
+use naosoccer_proto::{Action, MatchStats, RobotId, Tick, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 use serde::{Deserialize, Serialize};
 
@@ -57,7 +57,7 @@ impl MatchMeta {
 /// `tick` to `tick + 1` (robots 0..=3 blue, 4..=7 red).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TickActions {
-    pub tick: u64,
+    pub tick: Tick,
     pub actions: [Action; ROBOTS],
 }
 
@@ -98,7 +98,7 @@ pub struct RobotRecord {
 /// `/match/state`, at tick 0 and after every control tick.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StateRecord {
-    pub tick: u64,
+    pub tick: Tick,
     /// Game seconds since kick-off.
     pub time: f64,
     pub score: ScoreRecord,

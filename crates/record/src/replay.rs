@@ -1,5 +1,6 @@
 //! Re-simulating a recording and comparing every tick's state.
 
+use naosoccer_proto::Tick;
 use naosoccer_referee::Match;
 
 use crate::messages::StateRecord;
@@ -18,7 +19,7 @@ pub enum ReplayOutcome {
     },
     /// The first tick whose re-simulated state differs from the recording.
     Diverged {
-        tick: u64,
+        tick: Tick,
         recorded: Box<StateRecord>,
         replayed: Box<StateRecord>,
     },
@@ -40,7 +41,7 @@ pub fn replay(rec: &Recording) -> Result<ReplayOutcome, RecordError> {
         })
     };
     // States are written at tick 0 and after each step, in tick order.
-    if let Some(s) = states.next_if(|s| s.tick == 0) {
+    if let Some(s) = states.next_if(|s| s.tick == Tick::ZERO) {
         if let Some(d) = check(&m, s) {
             return Ok(d);
         }

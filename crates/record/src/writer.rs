@@ -7,7 +7,7 @@ use std::path::Path;
 
 use mcap::records::MessageHeader;
 use mcap::{Compression, WriteOptions, Writer};
-use naosoccer_proto::{Action, Event, ROBOTS};
+use naosoccer_proto::{Action, Event, Tick, ROBOTS};
 use naosoccer_referee::Match;
 use serde::Serialize;
 
@@ -188,7 +188,7 @@ impl<W: Write + Seek> Recorder<W> {
     }
 
     fn write_state(&mut self, m: &Match) -> Result<(), RecordError> {
-        let ns = m.tick() * self.tick_ns;
+        let ns = m.tick().get() * self.tick_ns;
         let state = StateRecord::of(m);
         self.write_json(Ch::State, ns, &state)?;
         if self.opts.foxglove {
@@ -211,8 +211,8 @@ impl<W: Write + Seek> Recorder<W> {
         actions: &[Action; ROBOTS],
         events: &[Event],
     ) -> Result<(), RecordError> {
-        let tick = m.tick().saturating_sub(1);
-        let ns = tick * self.tick_ns;
+        let tick = m.tick().prev().unwrap_or(Tick::ZERO);
+        let ns = tick.get() * self.tick_ns;
         self.write_json(
             Ch::Actions,
             ns,
@@ -224,10 +224,12 @@ impl<W: Write + Seek> Recorder<W> {
         for e in events {
             // A match's own events always have a tick (never `Unknown`).
             let at = e.tick().unwrap_or(tick);
-            self.write_json(Ch::Events, at * self.tick_ns, e)?;
+            self.write_json(Ch::Events, at.get() * self.tick_ns, e)?;
         }
         self.write_state(m)?;
-        if self.opts.flush_every_ticks > 0 && m.tick().is_multiple_of(self.opts.flush_every_ticks) {
+        if self.opts.flush_every_ticks > 0
+            && m.tick().get().is_multiple_of(self.opts.flush_every_ticks)
+        {
             self.writer.flush()?;
         }
         Ok(())
@@ -238,13 +240,13 @@ impl<W: Write + Seek> Recorder<W> {
     pub fn finish(mut self, m: &Match) -> Result<(RecordingSummary, W), RecordError> {
         let naosoccer_proto::PerTeam { blue, red } = m.score();
         let fin = FinalRecord {
-            ticks: m.tick(),
+            ticks: m.tick().get(),
             score: ScoreRecord { blue, red },
             stats: m.stats(),
             state_hash: hash_hex(m.state_hash()),
             completed: m.is_finished(),
         };
-        self.write_json(Ch::Stats, m.tick() * self.tick_ns, &fin)?;
+        self.write_json(Ch::Stats, m.tick().get() * self.tick_ns, &fin)?;
         self.writer.finish()?;
         let messages = topics::ALL
             .iter()

@@ -4,7 +4,7 @@
 use std::io::Cursor;
 
 use naosoccer_client::policy::PolicyKind;
-use naosoccer_proto::{Action, RobotId, Team, ROBOTS};
+use naosoccer_proto::{Action, RobotId, Team, Tick, ROBOTS};
 use naosoccer_record::{
     replay, MatchMeta, Recorder, RecorderOptions, Recording, RecordingSummary, ReplayOutcome,
 };
@@ -125,7 +125,7 @@ fn tampered_action_is_found_at_its_tick() {
         } => {
             assert_eq!(
                 tick,
-                tampered as u64 + 1,
+                Tick::new(tampered as u64 + 1),
                 "the state after the tampered tick"
             );
             assert_ne!(recorded.state_hash, replayed.state_hash);

@@ -3,7 +3,7 @@
 
 use naosoccer_proto::msg::{Frame, Pitch};
 use naosoccer_proto::{
-    Action, Event, MatchStats, Observation, RobotId, Score, SetPlayKind, SetPlayObs, Team,
+    Action, Event, MatchStats, Observation, RobotId, Score, SetPlayKind, SetPlayObs, Team, Tick,
     PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_sim::{Command as SimCommand, RobotModel, Sim, SimError, StateHasher};
@@ -41,7 +41,7 @@ pub struct Match {
     pass: PassRule,
     set_play: SetPlayRule,
     /// Control ticks played.
-    tick: u64,
+    tick: Tick,
     finished: bool,
     /// The start's kick-off, announced with the first tick's events.
     announce_start: bool,
@@ -90,7 +90,7 @@ impl Match {
                 r.set_play_distance,
                 (f64::from(r.set_play_seconds) * f64::from(cfg.control_hz)).round() as u64,
             ),
-            tick: 0,
+            tick: Tick::ZERO,
             finished: false,
             announce_start: true,
             controller: None,
@@ -101,7 +101,7 @@ impl Match {
             outcome: Outcome::default(),
             cfg: cfg.clone(),
         };
-        m.place_for_kickoff(m.kickoff.first(), 0);
+        m.place_for_kickoff(m.kickoff.first(), Tick::ZERO);
         Ok(m)
     }
 
@@ -214,7 +214,7 @@ impl Match {
         for e in &self.outcome.events {
             apply_stats(&mut self.stats, e);
         }
-        self.tick += 1;
+        self.tick = self.tick.next();
         &self.outcome.events
     }
 
@@ -267,7 +267,7 @@ impl Match {
         })
     }
 
-    fn run_rules(&mut self, tick: u64) {
+    fn run_rules(&mut self, tick: Tick) {
         let snap = self.sim.snapshot();
         let out = &mut self.outcome;
         let scored = self.goal.check(snap, tick, out);
@@ -312,14 +312,14 @@ impl Match {
         self.finished = self.clock.check(tick, out);
     }
 
-    fn apply_commands(&mut self, tick: u64) {
+    fn apply_commands(&mut self, tick: Tick) {
         for i in 0..self.outcome.commands.len() {
             match self.outcome.commands[i] {
                 Command::SetPlay { kind, team, x, y } => {
                     self.sim.place_ball(x, y);
                     let b = self.sim.snapshot().ball.pos;
                     let spot = (b[0], b[1]);
-                    self.set_play.award(kind, team, spot, tick + 1);
+                    self.set_play.award(kind, team, spot, tick.next());
                     SetPlayRule::event(tick, kind, team, spot, &mut self.outcome);
                     self.push_out_of_the_circle();
                     self.pass.reset();
@@ -348,7 +348,7 @@ impl Match {
                             self.outcome.events.push(Event::GetUp { tick, robot });
                         }
                     }
-                    self.place_for_kickoff(team, tick + 1);
+                    self.place_for_kickoff(team, tick.next());
                     self.outcome.events.push(Event::KickOff { tick, team });
                 }
             }
@@ -371,7 +371,7 @@ impl Match {
         }
     }
 
-    fn place_for_kickoff(&mut self, team: Team, first_tick: u64) {
+    fn place_for_kickoff(&mut self, team: Team, first_tick: Tick) {
         let mut spots = [(0.0, 0.0, 0.0); ROBOTS];
         for (spot, robot) in spots.iter_mut().zip(RobotId::all()) {
             let [x, y, h] = self.kickoff.place(robot, team);
@@ -415,7 +415,7 @@ impl Match {
     }
 
     /// Control ticks played so far.
-    pub fn tick(&self) -> u64 {
+    pub fn tick(&self) -> Tick {
         self.tick
     }
 
@@ -430,7 +430,7 @@ impl Match {
     /// Game time played, seconds: ticks over the control rate (the config
     /// check keeps the physics steps of a tick within 1% of a tick).
     pub fn sim_seconds(&self) -> f64 {
-        self.tick as f64 / f64::from(self.cfg.control_hz)
+        self.tick.get() as f64 / f64::from(self.cfg.control_hz)
     }
 
     /// Physics steps per control tick.
@@ -476,13 +476,13 @@ impl Match {
     pub fn state_hash(&self) -> u64 {
         let mut h = StateHasher::new();
         h.u64(self.sim.state_hash());
-        h.u64(self.tick);
+        h.u64(self.tick.get());
         h.u64(u64::from(self.finished));
         h.u64(u64::from(self.score.blue));
         h.u64(u64::from(self.score.red));
         h.u64(self.controller.map_or(u64::MAX, |c| c.index() as u64));
         for i in 0..ROBOTS {
-            h.u64(self.fall.up_at(i).unwrap_or(u64::MAX));
+            h.u64(self.fall.up_at(i).map_or(u64::MAX, Tick::get));
         }
         h.u64(self.pass.fingerprint());
         h.u64(self.set_play.fingerprint());
@@ -524,7 +524,7 @@ impl Match {
     }
 
     /// The tick at which a lying robot will be stood up.
-    pub fn up_at(&self, robot: RobotId) -> Option<u64> {
+    pub fn up_at(&self, robot: RobotId) -> Option<Tick> {
         self.fall.up_at(robot.index())
     }
 
@@ -563,7 +563,7 @@ impl Match {
         let Some(robot) = RobotId::new(team, player) else {
             return 0.0;
         };
-        if self.tick == 0 {
+        if self.tick == Tick::ZERO {
             return 0.0;
         }
         let w = &self.cfg.reward;

@@ -2,8 +2,9 @@
 //! in-process runner and training alike.
 //!
 //! - [`rules`]: one type per rule (clock, kick-off, goal, out of bounds, fall,
-//!   possession, pass, set play), each a function of a sim snapshot and the tick that
-//!   returns events and commands; rules never touch the sim.
+//!   possession, pass, set play), each a function of a sim snapshot and the
+//!   [`Tick`](naosoccer_proto::Tick) that returns events and commands; rules
+//!   never touch the sim.
 //! - [`Match`]: maps the eight robots' actions to sim commands, steps physics
 //!   for one control tick, runs the rules, applies their commands, keeps the
 //!   score and statistics (derived from the event stream) and builds each

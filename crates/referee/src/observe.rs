@@ -4,7 +4,7 @@
 use std::f32::consts::PI;
 
 use naosoccer_proto::{
-    BallObs, Observation, Player, RobotId, RobotObs, Score, ScoreObs, SetPlayObs, Team,
+    BallObs, Observation, Player, RobotId, RobotObs, Score, ScoreObs, SetPlayObs, Team, Tick,
     PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_sim::Snapshot;
@@ -13,7 +13,7 @@ use crate::rules::wrap_angle;
 
 /// What the referee knows beyond the snapshot.
 pub(crate) struct ObsContext<'a> {
-    pub tick: u64,
+    pub tick: Tick,
     pub time_left: f32,
     /// Goals, indexed by `Team::index`.
     pub score: Score,
@@ -90,7 +90,7 @@ pub(crate) fn wire_angle(a: f32) -> f32 {
 /// An observation with every field zero, to be filled by `observe_into`.
 pub fn blank_observation() -> Observation {
     Observation {
-        tick: 0,
+        tick: Tick::ZERO,
         team: Team::Blue,
         player: Player::new(0).expect("player 0"),
         time_left: 0.0,

@@ -2,7 +2,9 @@
 
 use std::f32::consts::PI;
 
-use naosoccer_proto::{Action, Event, RobotId, Score, SetPlayKind, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_proto::{
+    Action, Event, RobotId, Score, SetPlayKind, Team, Tick, PLAYERS_PER_TEAM, ROBOTS,
+};
 use naosoccer_referee::{Match, MatchConfig};
 
 const STAY: [Action; ROBOTS] = [Action::Stay; ROBOTS];
@@ -266,13 +268,13 @@ fn halves_and_a_fair_kick_off() {
     let mut m = Match::new(&cfg, 1).unwrap();
     let first = m.first_kickoff();
     let events = run_until(&mut m, &STAY, 600, |m, _| m.is_finished());
-    assert!(matches!(events[0], Event::KickOff { tick: 0, team } if team == first));
+    assert!(matches!(events[0], Event::KickOff { tick: Tick::ZERO, team } if team == first));
     let half_time = events
         .iter()
-        .position(|e| matches!(e, Event::HalfTime { tick: 299 }))
+        .position(|e| matches!(e, Event::HalfTime { tick } if *tick == Tick::new(299)))
         .expect("half time at the last tick of the first half");
     assert!(
-        matches!(events[half_time + 1], Event::KickOff { tick: 299, team } if team == first.other()),
+        matches!(events[half_time + 1], Event::KickOff { tick, team } if tick == Tick::new(299) && team == first.other()),
         "{:?}",
         &events[half_time..]
     );
@@ -302,7 +304,10 @@ fn robot_off_the_field_is_reset_to_its_place() {
     m.sim_mut().push_robot(r.index(), [0.0, 10.0, 0.0]);
     let events = m.step(&STAY).to_vec();
     assert!(
-        events.contains(&Event::RobotOut { tick: 0, robot: r }),
+        events.contains(&Event::RobotOut {
+            tick: Tick::ZERO,
+            robot: r
+        }),
         "{events:?}"
     );
     assert_eq!(m.stats().red.out_of_bounds, 1);
@@ -515,17 +520,22 @@ fn the_match_ends_on_time() {
     let mut m = Match::new(&cfg, 10).unwrap();
     assert_eq!(m.total_ticks(), 300);
     let events = run_until(&mut m, &STAY, 1000, |m, _| m.is_finished());
-    assert_eq!(m.tick(), 300);
-    assert_eq!(events.last(), Some(&Event::End { tick: 299 }));
+    assert_eq!(m.tick(), Tick::new(300));
+    assert_eq!(
+        events.last(),
+        Some(&Event::End {
+            tick: Tick::new(299)
+        })
+    );
     assert!(matches!(
         events.first(),
         Some(Event::KickOff {
-            tick: 0,
+            tick: Tick::ZERO,
             team: Team::Blue
         })
     ));
     assert!(m.step(&STAY).is_empty());
-    assert_eq!(m.tick(), 300);
+    assert_eq!(m.tick(), Tick::new(300));
     assert!((m.sim_seconds() - 30.0).abs() < 1e-6);
 }
 

@@ -3,7 +3,7 @@
 //! connection ([`ConnEntry`]) with the two ways of sending to it.
 
 use naosoccer_proto::msg::{ErrorMsg, Joined, MatchEnd, MatchId, MatchInfo, Player};
-use naosoccer_proto::{Action, Event, Observation, Team, PLAYERS_PER_TEAM};
+use naosoccer_proto::{Action, Event, Observation, Team, Tick, PLAYERS_PER_TEAM};
 use naosoccer_referee::Match;
 use std::sync::Arc;
 use tokio::sync::{mpsc, oneshot};
@@ -21,7 +21,7 @@ pub(crate) type Kick = oneshot::Sender<ErrorMsg>;
 pub(crate) enum Outgoing {
     Observation {
         match_id: MatchId,
-        tick: u64,
+        tick: Tick,
         len: u8,
         obs: [Observation; PLAYERS_PER_TEAM],
         /// The events of the tick that led here, shared by every connection.
@@ -51,7 +51,7 @@ pub(crate) enum MatchCmd {
     Action {
         conn: ConnId,
         team: Team,
-        tick: u64,
+        tick: Tick,
         actions: [Option<Action>; PLAYERS_PER_TEAM],
     },
 }
@@ -73,7 +73,7 @@ pub(crate) fn send_observation(
     template: &Observation,
     events: &Arc<Vec<Event>>,
     match_id: MatchId,
-    tick: u64,
+    tick: Tick,
     c: &ConnEntry,
 ) -> bool {
     let mut obs: [Observation; PLAYERS_PER_TEAM] = std::array::from_fn(|_| template.clone());

@@ -19,7 +19,7 @@ use crate::observer::{MatchObserver, TickRecord};
 use naosoccer_client::policy::ScriptedParams;
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Fill, MatchId, MatchInfo, MatchState, Mode};
-use naosoccer_proto::{Action, Event, Observation, RobotId, Team, ROBOTS};
+use naosoccer_proto::{Action, Event, Observation, RobotId, Team, Tick, ROBOTS};
 use naosoccer_referee::Match;
 use std::future::Future;
 use std::pin::Pin;
@@ -65,10 +65,10 @@ pub(crate) struct MatchTask {
     actions: [Action; ROBOTS],
     answered: [bool; ROBOTS],
     /// Real time: the newest action received per robot and its tick.
-    pending: [Option<(u64, Action)>; ROBOTS],
+    pending: [Option<(Tick, Action)>; ROBOTS],
     misses: [u64; ROBOTS],
     /// The tick whose observation went out last (actions may name it or older).
-    observed: Option<u64>,
+    observed: Option<Tick>,
     rx: mpsc::Receiver<MatchCmd>,
     info: watch::Sender<MatchInfo>,
     shutdown: watch::Receiver<bool>,
@@ -241,8 +241,11 @@ impl MatchTask {
 
     async fn realtime(&mut self) -> Stop {
         let period = Duration::from_secs_f64(1.0 / f64::from(self.game.config().control_hz));
-        self.lateness_us
-            .reserve(self.game.total_ticks().saturating_sub(self.game.tick()) as usize);
+        self.lateness_us.reserve(
+            self.game
+                .total_ticks()
+                .saturating_sub(self.game.tick().get()) as usize,
+        );
         // Matches tick at staggered phases of the period (golden-ratio
         // spacing by id), so many real-time matches do not all wake, step and
         // encode at the same instant and delay each other's ticks.
@@ -284,9 +287,9 @@ impl MatchTask {
     /// [`step`](Self::step), with a panic caught so it ends only this match
     /// (false) instead of unwinding through the task. The match state after a
     /// panic is not trusted further than for the final `match_end`.
-    fn guarded_step(&mut self, tick: u64, lateness: Option<Duration>) -> bool {
+    fn guarded_step(&mut self, tick: Tick, lateness: Option<Duration>) -> bool {
         let step = std::panic::AssertUnwindSafe(|| {
-            if self.params.panic_at_tick == Some(tick) {
+            if self.params.panic_at_tick == Some(tick.get()) {
                 panic!(
                     "injected fault: match {} panics at tick {tick}",
                     self.params.id
@@ -298,7 +301,7 @@ impl MatchTask {
     }
 
     /// Fill policies act, then one control tick is played.
-    fn step(&mut self, tick: u64, lateness: Option<Duration>) {
+    fn step(&mut self, tick: Tick, lateness: Option<Duration>) {
         for r in RobotId::all() {
             if self.slots[r.index()] != Slot::Open {
                 continue;
@@ -348,7 +351,7 @@ impl MatchTask {
         (0..ROBOTS).any(|r| matches!(self.slots[r], Slot::Client(_)) && !self.answered[r])
     }
 
-    fn send_observations(&mut self, tick: u64) {
+    fn send_observations(&mut self, tick: Tick) {
         self.observed = Some(tick);
         let mut i = 0;
         while i < self.conns.len() {
@@ -367,7 +370,7 @@ impl MatchTask {
             let id = c.id;
             let queued = c.out.max_capacity();
             if let Some(mut c) = self.remove_conn(id) {
-                tracing::warn!(match_id = %self.params.id, conn = id, tick, queued, "client is not reading; dropped from the match, its robots stand");
+                tracing::warn!(match_id = %self.params.id, conn = id, tick = tick.get(), queued, "client is not reading; dropped from the match, its robots stand");
                 let m = format!(
                     "you fell {queued} messages behind in match {}; dropped from the match (its robots stand), closing the connection",
                     self.params.id

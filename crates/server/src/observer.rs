@@ -4,7 +4,7 @@
 //! from the match task, in tick order.
 
 use naosoccer_proto::msg::{MatchEnd, MatchInfo};
-use naosoccer_proto::{Action, Event, ROBOTS};
+use naosoccer_proto::{Action, Event, Tick, ROBOTS};
 use naosoccer_referee::Match;
 use std::sync::Arc;
 use std::time::Duration;
@@ -15,7 +15,7 @@ pub struct TickRecord<'a> {
     /// The match after the tick (its `tick()` is one past the played tick).
     pub game: &'a Match,
     /// The tick that was played.
-    pub tick: u64,
+    pub tick: Tick,
     /// The actions applied, robot index order (misses already turned into `stay`).
     pub actions: &'a [Action; ROBOTS],
     pub events: &'a [Event],

@@ -10,7 +10,7 @@ use naosoccer_proto::framed::WireError;
 use naosoccer_proto::msg::{
     EndReason, ErrorCode, ErrorMsg, MatchId, ObservationRef, Player, ServerMsg,
 };
-use naosoccer_proto::Team;
+use naosoccer_proto::{Team, Tick};
 use std::net::SocketAddr;
 use std::sync::Arc;
 use tokio::sync::{mpsc, oneshot};
@@ -26,7 +26,7 @@ pub(crate) struct Seat {
     pub(crate) kicked: oneshot::Receiver<ErrorMsg>,
     pub(crate) kick_gone: bool,
     /// The newest tick observed; actions may not name a later one.
-    pub(crate) observed: Option<u64>,
+    pub(crate) observed: Option<Tick>,
 }
 
 pub(crate) struct Session {

@@ -36,10 +36,11 @@ impl Policy for RandomPolicy {
 mod tests {
     use super::*;
     use naosoccer_proto::Team;
+    use naosoccer_proto::Tick;
 
     fn obs() -> Observation {
         Observation {
-            tick: 0,
+            tick: Tick::ZERO,
             team: Team::Blue,
             player: naosoccer_proto::Player::new(0).unwrap(),
             time_left: 0.0,

@@ -570,6 +570,7 @@ fn dist(a: [f32; 2], b: [f32; 2]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use naosoccer_proto::Tick;
     use naosoccer_proto::{BallObs, Team};
 
     fn obs(player: u8, me: RobotObs, ball: [f32; 2]) -> Observation {
@@ -587,7 +588,7 @@ mod tests {
         }
         own[player as usize] = me;
         Observation {
-            tick: 0,
+            tick: Tick::ZERO,
             team: Team::Blue,
             player: naosoccer_proto::Player::new(player as usize).unwrap(),
             time_left: 600.0,

@@ -4,7 +4,7 @@
 //! half time and the second half starts with a kick-off by the team that did
 //! not kick off the first.
 
-use naosoccer_proto::{Event, Team};
+use naosoccer_proto::{Event, Team, Tick};
 
 use super::{Command, Outcome};
 
@@ -13,7 +13,7 @@ pub struct Clock {
     total_ticks: u64,
     control_hz: f32,
     /// The first tick of the second half (`total_ticks` with one half).
-    second_half: u64,
+    second_half: Tick,
 }
 
 impl Clock {
@@ -21,11 +21,11 @@ impl Clock {
         let total_ticks = (f64::from(minutes) * 60.0 * f64::from(control_hz))
             .round()
             .max(1.0) as u64;
-        let second_half = if halves >= 2 && total_ticks >= 2 {
+        let second_half = Tick::new(if halves >= 2 && total_ticks >= 2 {
             total_ticks / 2
         } else {
             total_ticks
-        };
+        });
         Clock {
             total_ticks,
             control_hz,
@@ -38,7 +38,7 @@ impl Clock {
     }
 
     /// The half that the tick `tick` is in: 1 or 2.
-    pub fn half(&self, tick: u64) -> u8 {
+    pub fn half(&self, tick: Tick) -> u8 {
         if tick >= self.second_half {
             2
         } else {
@@ -48,8 +48,9 @@ impl Clock {
 
     /// At the last tick of the first half: `HalfTime` and the second half's
     /// kick-off by `second_kicker`. Returns whether it was half time.
-    pub fn check_half_time(&self, tick: u64, second_kicker: Team, out: &mut Outcome) -> bool {
-        let half_time = self.second_half < self.total_ticks && tick + 1 == self.second_half;
+    pub fn check_half_time(&self, tick: Tick, second_kicker: Team, out: &mut Outcome) -> bool {
+        let half_time =
+            self.second_half.get() < self.total_ticks && tick.next() == self.second_half;
         if half_time {
             out.events.push(Event::HalfTime { tick });
             out.commands.push(Command::KickOff {
@@ -60,13 +61,13 @@ impl Clock {
     }
 
     /// Seconds of game time left when `tick` ticks have been played.
-    pub fn time_left(&self, tick: u64) -> f32 {
-        self.total_ticks.saturating_sub(tick) as f32 / self.control_hz
+    pub fn time_left(&self, tick: Tick) -> f32 {
+        self.total_ticks.saturating_sub(tick.get()) as f32 / self.control_hz
     }
 
     /// Emits `End` when the tick being played is the last one.
-    pub fn check(&self, tick: u64, out: &mut Outcome) -> bool {
-        let last = tick + 1 >= self.total_ticks;
+    pub fn check(&self, tick: Tick, out: &mut Outcome) -> bool {
+        let last = tick.next().get() >= self.total_ticks;
         if last {
             out.events.push(Event::End { tick });
         }
@@ -82,32 +83,47 @@ mod tests {
     fn ten_minutes_at_ten_hertz_is_six_thousand_ticks() {
         let c = Clock::new(10.0, 10.0, 1);
         assert_eq!(c.total_ticks(), 6000);
-        assert_eq!(c.time_left(0), 600.0);
-        assert_eq!(c.time_left(5990), 1.0);
+        assert_eq!(c.time_left(Tick::ZERO), 600.0);
+        assert_eq!(c.time_left(Tick::new(5990)), 1.0);
         let mut out = Outcome::default();
-        assert!(!c.check(5998, &mut out));
-        assert!(c.check(5999, &mut out));
-        assert_eq!(out.events, vec![Event::End { tick: 5999 }]);
+        assert!(!c.check(Tick::new(5998), &mut out));
+        assert!(c.check(Tick::new(5999), &mut out));
+        assert_eq!(
+            out.events,
+            vec![Event::End {
+                tick: Tick::new(5999)
+            }]
+        );
     }
 
     #[test]
     fn two_halves_split_the_ticks_and_the_other_team_kicks_off_the_second() {
         let c = Clock::new(10.0, 10.0, 2);
         assert_eq!(
-            (c.half(0), c.half(2999), c.half(3000), c.half(5999)),
+            (
+                c.half(Tick::ZERO),
+                c.half(Tick::new(2999)),
+                c.half(Tick::new(3000)),
+                c.half(Tick::new(5999))
+            ),
             (1, 1, 2, 2)
         );
         let mut out = Outcome::default();
-        assert!(!c.check_half_time(2998, Team::Red, &mut out));
-        assert!(!c.check_half_time(3000, Team::Red, &mut out));
+        assert!(!c.check_half_time(Tick::new(2998), Team::Red, &mut out));
+        assert!(!c.check_half_time(Tick::new(3000), Team::Red, &mut out));
         assert!(out.events.is_empty());
-        assert!(c.check_half_time(2999, Team::Red, &mut out));
-        assert_eq!(out.events, vec![Event::HalfTime { tick: 2999 }]);
+        assert!(c.check_half_time(Tick::new(2999), Team::Red, &mut out));
+        assert_eq!(
+            out.events,
+            vec![Event::HalfTime {
+                tick: Tick::new(2999)
+            }]
+        );
         assert_eq!(out.commands, vec![Command::KickOff { team: Team::Red }]);
         // One half: never half time.
         let one = Clock::new(10.0, 10.0, 1);
         let mut out = Outcome::default();
-        assert!((0..6000).all(|t| !one.check_half_time(t, Team::Red, &mut out)));
-        assert_eq!(one.half(5999), 1);
+        assert!((0..6000).all(|t| !one.check_half_time(Tick::new(t), Team::Red, &mut out)));
+        assert_eq!(one.half(Tick::new(5999)), 1);
     }
 }

@@ -11,7 +11,7 @@
 //! without its controller is counted down here within a second, and stood
 //! up by this rule (the sim's fall lasts until `stand_up` or a placement).
 
-use naosoccer_proto::{Event, RobotId, ROBOTS};
+use naosoccer_proto::{Event, RobotId, Tick, ROBOTS};
 use naosoccer_sim::Snapshot;
 
 use super::{Command, Outcome};
@@ -22,7 +22,7 @@ pub struct FallRule {
     tilt: f32,
     standup_ticks: u64,
     /// For each lying robot, the tick at which it gets up.
-    up_at: [Option<u64>; ROBOTS],
+    up_at: [Option<Tick>; ROBOTS],
 }
 
 impl FallRule {
@@ -46,7 +46,7 @@ impl FallRule {
     }
 
     /// The tick at which a lying robot will be stood up.
-    pub fn up_at(&self, robot: usize) -> Option<u64> {
+    pub fn up_at(&self, robot: usize) -> Option<Tick> {
         self.up_at.get(robot).copied().flatten()
     }
 
@@ -69,7 +69,7 @@ impl FallRule {
         r.fallen || r.pos[2] < self.height || r.tilt > self.tilt
     }
 
-    pub fn check(&mut self, snap: &Snapshot, tick: u64, out: &mut Outcome) {
+    pub fn check(&mut self, snap: &Snapshot, tick: Tick, out: &mut Outcome) {
         for i in 0..ROBOTS {
             let Some(robot) = RobotId::from_index(i) else {
                 continue;
@@ -101,20 +101,32 @@ mod tests {
         let mut rule = FallRule::new(0.2, 1.0, 30);
         let mut s = snapshot();
         let mut out = Outcome::default();
-        rule.check(&s, 10, &mut out);
+        rule.check(&s, Tick::new(10), &mut out);
         assert!(out.events.is_empty());
         s.robots[2].pos[2] = 0.1;
-        rule.check(&s, 11, &mut out);
+        rule.check(&s, Tick::new(11), &mut out);
         let robot = RobotId::from_index(2).unwrap();
-        assert_eq!(out.events, vec![Event::Fall { tick: 11, robot }]);
+        assert_eq!(
+            out.events,
+            vec![Event::Fall {
+                tick: Tick::new(11),
+                robot
+            }]
+        );
         assert!(rule.is_down(2));
         out.clear();
         for t in 12..41 {
-            rule.check(&s, t, &mut out);
+            rule.check(&s, Tick::new(t), &mut out);
         }
         assert!(out.events.is_empty(), "{:?}", out.events);
-        rule.check(&s, 41, &mut out);
-        assert_eq!(out.events, vec![Event::GetUp { tick: 41, robot }]);
+        rule.check(&s, Tick::new(41), &mut out);
+        assert_eq!(
+            out.events,
+            vec![Event::GetUp {
+                tick: Tick::new(41),
+                robot
+            }]
+        );
         assert_eq!(out.commands, vec![Command::StandUp { robot }]);
         assert!(!rule.is_down(2));
     }
@@ -129,9 +141,15 @@ mod tests {
         s.robots[1].fallen = true;
         s.robots[1].tilt = 0.4;
         let mut out = Outcome::default();
-        rule.check(&s, 7, &mut out);
+        rule.check(&s, Tick::new(7), &mut out);
         let robot = RobotId::from_index(1).unwrap();
-        assert_eq!(out.events, vec![Event::Fall { tick: 7, robot }]);
+        assert_eq!(
+            out.events,
+            vec![Event::Fall {
+                tick: Tick::new(7),
+                robot
+            }]
+        );
         assert!(rule.is_down(1));
     }
 
@@ -141,11 +159,11 @@ mod tests {
         let mut s = snapshot();
         s.robots[6].tilt = 1.2;
         let mut out = Outcome::default();
-        rule.check(&s, 3, &mut out);
+        rule.check(&s, Tick::new(3), &mut out);
         assert_eq!(
             out.events,
             vec![Event::Fall {
-                tick: 3,
+                tick: Tick::new(3),
                 robot: RobotId::from_index(6).unwrap()
             }]
         );

@@ -2,7 +2,7 @@
 //! crossbar. The team attacking that goal scores; the conceding team kicks off
 //! with the ball back on the centre spot.
 
-use naosoccer_proto::{Event, Team};
+use naosoccer_proto::{Event, Team, Tick};
 use naosoccer_sim::Snapshot;
 
 use super::{last_touch, Command, Field, Outcome};
@@ -35,7 +35,7 @@ impl GoalRule {
 
     /// Emits the goal and the kick-off by the conceding team. Returns the
     /// scoring team so the driver can skip the rules a goal makes moot.
-    pub fn check(&self, snap: &Snapshot, tick: u64, out: &mut Outcome) -> Option<Team> {
+    pub fn check(&self, snap: &Snapshot, tick: Tick, out: &mut Outcome) -> Option<Team> {
         let team = self.scored(snap)?;
         // Own goals count for the other team but have no scorer.
         let scorer = last_touch(snap).filter(|r| r.team() == team);
@@ -83,13 +83,13 @@ mod tests {
         let rule = GoalRule::new(field());
         let mut out = Outcome::default();
         assert_eq!(
-            rule.check(&with_ball(-3.3, 0.0, 0.05), 42, &mut out),
+            rule.check(&with_ball(-3.3, 0.0, 0.05), Tick::new(42), &mut out),
             Some(Team::Red)
         );
         assert_eq!(
             out.events,
             vec![Event::Goal {
-                tick: 42,
+                tick: Tick::new(42),
                 team: Team::Red,
                 scorer: None
             }]

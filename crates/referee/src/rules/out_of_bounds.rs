@@ -17,7 +17,7 @@
 //! the lines, standing or lying, is reset upright to its predetermined
 //! position.
 
-use naosoccer_proto::{Event, RobotId, SetPlayKind, Team};
+use naosoccer_proto::{Event, RobotId, SetPlayKind, Team, Tick};
 use naosoccer_sim::Snapshot;
 
 use super::{last_touch, Command, Field, KickOff, Outcome};
@@ -106,7 +106,7 @@ impl OutOfBoundsRule {
 
     /// The ball: call only when no goal was scored this tick. Emits
     /// `BallOut` and the set play's award, and asks for it.
-    pub fn check_ball(&self, snap: &Snapshot, tick: u64, out: &mut Outcome) -> Option<Restart> {
+    pub fn check_ball(&self, snap: &Snapshot, tick: Tick, out: &mut Outcome) -> Option<Restart> {
         let [x, y, _] = snap.ball.pos;
         let last = last_touch(snap).map(RobotId::team);
         let r = self.restart(x, y, last)?;
@@ -128,7 +128,7 @@ impl OutOfBoundsRule {
     /// The robots: one whose torso is further than the margin outside the
     /// lines goes back to its predetermined place, upright, whether it
     /// stands or lies.
-    pub fn check_robots(&self, snap: &Snapshot, kickoff: &KickOff, tick: u64, out: &mut Outcome) {
+    pub fn check_robots(&self, snap: &Snapshot, kickoff: &KickOff, tick: Tick, out: &mut Outcome) {
         for (i, r) in snap.robots.iter().enumerate() {
             if self.field.contains(r.pos[0], r.pos[1], self.robot_margin) {
                 continue;
@@ -242,12 +242,12 @@ mod tests {
         s.ball.pos = [1.0, 2.5, 0.05];
         s.robots[2].last_ball_touch_step = Some(10);
         let mut out = Outcome::default();
-        let r = rule().check_ball(&s, 7, &mut out).unwrap();
+        let r = rule().check_ball(&s, Tick::new(7), &mut out).unwrap();
         assert_eq!(r.team, Team::Red);
         assert_eq!(
             out.events,
             vec![Event::BallOut {
-                tick: 7,
+                tick: Tick::new(7),
                 x: 1.0,
                 y: 2.2,
                 last_touch: Some(Team::Blue)
@@ -270,9 +270,15 @@ mod tests {
         s.robots[5].pos = [0.0, -2.9, 0.1];
         let kickoff = KickOff::new(&RulesConfig::default(), Team::Blue);
         let mut out = Outcome::default();
-        rule().check_robots(&s, &kickoff, 7, &mut out);
+        rule().check_robots(&s, &kickoff, Tick::new(7), &mut out);
         let robot = RobotId::from_index(5).unwrap();
-        assert_eq!(out.events, vec![Event::RobotOut { tick: 7, robot }]);
+        assert_eq!(
+            out.events,
+            vec![Event::RobotOut {
+                tick: Tick::new(7),
+                robot
+            }]
+        );
         let [x, y, heading] = kickoff.home(robot);
         assert_eq!(
             out.commands,

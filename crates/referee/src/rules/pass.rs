@@ -2,7 +2,7 @@
 //! first, with no opponent control between. Counted once, when the receiver
 //! takes control.
 
-use naosoccer_proto::{Event, RobotId};
+use naosoccer_proto::{Event, RobotId, Tick};
 
 use super::Outcome;
 
@@ -61,7 +61,7 @@ impl PassRule {
         &mut self,
         controller: Option<RobotId>,
         ball: [f32; 2],
-        tick: u64,
+        tick: Tick,
         out: &mut Outcome,
     ) -> Option<PassMade> {
         let to = controller?;
@@ -115,10 +115,10 @@ mod tests {
         let mut rule = PassRule::new();
         let mut out = Outcome::default();
         let z = [0.0, 0.0];
-        rule.control(Some(a), z, 1, &mut out);
+        rule.control(Some(a), z, Tick::new(1), &mut out);
         rule.kick(a, [1.0, 1.0]);
-        rule.control(None, z, 2, &mut out);
-        let made = rule.control(Some(b), [4.0, 5.0], 5, &mut out);
+        rule.control(None, z, Tick::new(2), &mut out);
+        let made = rule.control(Some(b), [4.0, 5.0], Tick::new(5), &mut out);
         assert_eq!(
             made,
             Some(PassMade {
@@ -128,13 +128,13 @@ mod tests {
                 end: [4.0, 5.0]
             })
         );
-        rule.control(Some(b), z, 6, &mut out);
-        rule.control(None, z, 7, &mut out);
-        rule.control(Some(b), z, 8, &mut out);
+        rule.control(Some(b), z, Tick::new(6), &mut out);
+        rule.control(None, z, Tick::new(7), &mut out);
+        rule.control(Some(b), z, Tick::new(8), &mut out);
         assert_eq!(
             out.events,
             vec![Event::Pass {
-                tick: 5,
+                tick: Tick::new(5),
                 from: a,
                 to: b,
                 distance: 5.0,
@@ -149,17 +149,17 @@ mod tests {
         let mut out = Outcome::default();
         let z = [0.0, 0.0];
         // Taken off a teammate's feet without a kick.
-        rule.control(Some(a), z, 1, &mut out);
-        rule.control(Some(b), z, 2, &mut out);
+        rule.control(Some(a), z, Tick::new(1), &mut out);
+        rule.control(Some(b), z, Tick::new(2), &mut out);
         // Kicked, intercepted, then back to blue.
         rule.kick(b, z);
-        rule.control(Some(o), z, 3, &mut out);
-        rule.control(Some(a), z, 4, &mut out);
+        rule.control(Some(o), z, Tick::new(3), &mut out);
+        rule.control(Some(a), z, Tick::new(4), &mut out);
         assert_eq!(passes(&out), 0);
         // A restart between kick and reception.
         rule.kick(a, z);
         rule.reset();
-        rule.control(Some(b), z, 9, &mut out);
+        rule.control(Some(b), z, Tick::new(9), &mut out);
         assert_eq!(passes(&out), 0);
     }
 }

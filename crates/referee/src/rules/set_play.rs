@@ -10,7 +10,7 @@
 //! touch that nudges it, or a collision); a set play awarded while another
 //! lasts replaces it.
 
-use naosoccer_proto::{Event, RobotId, SetPlayKind, Team};
+use naosoccer_proto::{Event, RobotId, SetPlayKind, Team, Tick};
 use naosoccer_sim::Snapshot;
 
 use super::Outcome;
@@ -24,7 +24,7 @@ pub struct ActiveSetPlay {
     /// Where the ball was put, world frame.
     pub spot: (f32, f32),
     /// The first tick at which the other team may approach anyway.
-    pub until: u64,
+    pub until: Tick,
 }
 
 #[derive(Debug, Clone)]
@@ -53,7 +53,7 @@ impl SetPlayRule {
 
     /// A set play starts with the ball at `spot`; `first_tick` is the first
     /// tick played under it.
-    pub fn award(&mut self, kind: SetPlayKind, team: Team, spot: (f32, f32), first_tick: u64) {
+    pub fn award(&mut self, kind: SetPlayKind, team: Team, spot: (f32, f32), first_tick: Tick) {
         self.active = Some(ActiveSetPlay {
             kind,
             team,
@@ -67,21 +67,21 @@ impl SetPlayRule {
     }
 
     /// Control ticks left before the timeout, seen at the start of `tick`.
-    pub fn ticks_left(&self, tick: u64) -> u32 {
+    pub fn ticks_left(&self, tick: Tick) -> u32 {
         self.active.map_or(0, |a| {
-            a.until.saturating_sub(tick).min(u64::from(u32::MAX)) as u32
+            a.until.saturating_since(tick).min(u64::from(u32::MAX)) as u32
         })
     }
 
     /// Ends the set play when the ball has been played or time is up.
     /// Returns whether it ended this tick.
-    pub fn check(&mut self, snap: &Snapshot, tick: u64) -> bool {
+    pub fn check(&mut self, snap: &Snapshot, tick: Tick) -> bool {
         let Some(a) = self.active else {
             return false;
         };
         let [x, y, _] = snap.ball.pos;
         let moved = (x - a.spot.0).hypot(y - a.spot.1) > Self::PLAYED;
-        if moved || tick + 1 >= a.until {
+        if moved || tick.next() >= a.until {
             self.active = None;
             return true;
         }
@@ -144,7 +144,7 @@ impl SetPlayRule {
         match self.active {
             None => u64::MAX,
             Some(a) => {
-                let mut h = a.until;
+                let mut h = a.until.get();
                 h = h.wrapping_mul(31) ^ a.kind.index() as u64;
                 h = h.wrapping_mul(31) ^ a.team.index() as u64;
                 h = h.wrapping_mul(31) ^ u64::from(a.spot.0.to_bits());
@@ -154,7 +154,7 @@ impl SetPlayRule {
     }
 
     /// The event of an award (kick-offs have their own).
-    pub fn event(tick: u64, kind: SetPlayKind, team: Team, spot: (f32, f32), out: &mut Outcome) {
+    pub fn event(tick: Tick, kind: SetPlayKind, team: Team, spot: (f32, f32), out: &mut Outcome) {
         out.events.push(Event::SetPlay {
             tick,
             play: kind,
@@ -179,27 +179,30 @@ mod tests {
         let mut rule = SetPlayRule::new(0.6, 10);
         let mut s = snapshot();
         s.ball.pos = [1.0, 2.2, 0.05];
-        rule.award(SetPlayKind::KickIn, Team::Blue, (1.0, 2.2), 101);
-        assert_eq!(rule.ticks_left(101), 10);
-        assert!(!rule.check(&s, 101));
+        rule.award(SetPlayKind::KickIn, Team::Blue, (1.0, 2.2), Tick::new(101));
+        assert_eq!(rule.ticks_left(Tick::new(101)), 10);
+        assert!(!rule.check(&s, Tick::new(101)));
         s.ball.pos = [1.03, 2.2, 0.05];
-        assert!(!rule.check(&s, 102), "a nudge under 5 cm is not play");
+        assert!(
+            !rule.check(&s, Tick::new(102)),
+            "a nudge under 5 cm is not play"
+        );
         s.ball.pos = [1.1, 2.2, 0.05];
-        assert!(rule.check(&s, 103));
+        assert!(rule.check(&s, Tick::new(103)));
         assert!(rule.active().is_none());
 
-        rule.award(SetPlayKind::GoalKick, Team::Red, (2.4, 1.7), 201);
+        rule.award(SetPlayKind::GoalKick, Team::Red, (2.4, 1.7), Tick::new(201));
         s.ball.pos = [2.4, 1.7, 0.05];
         for t in 201..210 {
-            assert!(!rule.check(&s, t), "tick {t}");
+            assert!(!rule.check(&s, Tick::new(t)), "tick {t}");
         }
-        assert!(rule.check(&s, 210));
+        assert!(rule.check(&s, Tick::new(210)));
     }
 
     #[test]
     fn only_the_other_team_is_kept_out_and_only_toward_the_ball() {
         let mut rule = SetPlayRule::new(0.6, 10);
-        rule.award(SetPlayKind::CornerKick, Team::Blue, (2.95, 2.2), 0);
+        rule.award(SetPlayKind::CornerKick, Team::Blue, (2.95, 2.2), Tick::ZERO);
         let blue = RobotId::new(Team::Blue, 1).unwrap();
         // Red at 0.5 m facing the ball: blocked; facing away: free.
         assert!(rule.blocks_forward(red(1), 2.45, 2.2, 0.0, 0.05));
@@ -212,7 +215,7 @@ mod tests {
     #[test]
     fn push_out_goes_straight_out_to_the_edge() {
         let mut rule = SetPlayRule::new(0.6, 10);
-        rule.award(SetPlayKind::KickIn, Team::Red, (0.0, -2.2), 0);
+        rule.award(SetPlayKind::KickIn, Team::Red, (0.0, -2.2), Tick::ZERO);
         let (x, y) = rule.push_out(Team::Blue, 0.0, -1.9).unwrap();
         assert!(
             (x - 0.0).abs() < 1e-6 && (y - (-2.2 + 0.62)).abs() < 1e-5,

@@ -4,7 +4,7 @@
 use super::{MatchTask, Slot, Stop};
 use crate::match_msg::{deliver, send_observation, ConnEntry, ConnId, MatchCmd, Outgoing};
 use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Joined, Mode, Player};
-use naosoccer_proto::RobotId;
+use naosoccer_proto::{RobotId, Tick};
 
 impl MatchTask {
     /// Takes a connection out of the match; its robots stand from now on.
@@ -24,7 +24,7 @@ impl MatchTask {
     pub(super) fn handle(&mut self, cmd: MatchCmd) -> Option<Stop> {
         match cmd {
             MatchCmd::End { reply } => {
-                tracing::info!(match_id = %self.params.id, tick = self.game.tick(), "ended by an admin");
+                tracing::info!(match_id = %self.params.id, tick = self.game.tick().get(), "ended by an admin");
                 self.ended_by = Some(reply);
                 return Some(Stop::Ended);
             }
@@ -116,7 +116,7 @@ impl MatchTask {
             } => {
                 // From a connection no longer in the match: nothing to do.
                 let c = self.conns.iter().find(|c| c.id == conn)?;
-                let current = self.observed.unwrap_or(0);
+                let current = self.observed.unwrap_or(Tick::ZERO);
                 if self.params.mode == Mode::Lockstep && tick < current {
                     let e = ErrorMsg {
                         code: ErrorCode::DeadlineExceeded,

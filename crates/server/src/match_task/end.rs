@@ -32,7 +32,7 @@ impl MatchTask {
             state_hash: format!("{:016x}", self.game.state_hash()),
         };
         if reason == EndReason::Internal {
-            tracing::error!(match_id = %id, tick = end.tick, "match task panicked; ending the match");
+            tracing::error!(match_id = %id, tick = end.tick.get(), "match task panicked; ending the match");
             // It answers the actions for the tick that failed, so a client
             // that pairs replies in order pairs it with them.
             let mut e = ErrorMsg::new(
@@ -48,7 +48,7 @@ impl MatchTask {
         tracing::info!(
             match_id = %id,
             ?reason,
-            ticks = end.tick,
+            ticks = end.tick.get(),
             blue = blue,
             red = red,
             misses = ?self.misses,
