@@ -2,10 +2,12 @@
 //! SDK's WebSocket server (docs/RECORDINGS.md, "Watching live").
 //!
 //! Each match gets its own topics, `/match/{id}/...`: the recording's 3D
-//! scene (`foxglove.SceneUpdate`, JSON, built by `naosoccer_record`'s scene
-//! code) with a scoreboard text above the pitch, the robots' and ball's
+//! scene (`foxglove.SceneUpdate`, built by `naosoccer_record`'s scene code)
+//! with a scoreboard text above the pitch, the robots' and ball's
 //! transforms (`foxglove.FrameTransforms`), the state, the score and clock,
-//! the referee events (also as `foxglove.Log`) and the statistics.
+//! the referee events (also as `foxglove.Log`) and the statistics. The
+//! Foxglove channels carry the SDK's own message types, protobuf-encoded
+//! under the SDK's schemas; the naosoccer channels are JSON.
 //!
 //! Watching changes nothing: a stream only reads the match after a tick, on
 //! the match's own thread, and hands the bytes to the SDK, whose per-viewer
@@ -18,13 +20,14 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use anyhow::Context as _;
+use foxglove::messages::{log, FrameTransforms, Log, SceneEntity, SceneUpdate, TextPrimitive};
 use foxglove::websocket::{ChannelView, Client, ServerListener};
-use foxglove::{Context, PartialMetadata, RawChannel, Schema, WebSocketServerHandle};
+use foxglove::{Context, Encode, PartialMetadata, RawChannel, Schema, WebSocketServerHandle};
 use naosoccer_proto::{Event, MatchStats, Tick};
 use naosoccer_record::foxglove as scene;
 use naosoccer_record::StateRecord;
 use naosoccer_referee::Match;
-use serde_json::{json, Value};
+use serde_json::json;
 
 pub mod viewer;
 
@@ -164,8 +167,10 @@ pub struct MatchStream {
     stats: Arc<RawChannel>,
     /// The events again as `foxglove.Log`, for Foxglove's Log panel.
     log: Arc<RawChannel>,
-    /// The recording's scene entities, serialised once at kick-off: the
-    /// pitch, and the robots and ball (frame-locked: the transforms move them).
+    /// The recording's scene entities, encoded once at kick-off, each part
+    /// a whole `SceneUpdate` (protobuf messages concatenate into one whose
+    /// entities are all of theirs): the pitch, and the robots and ball
+    /// (frame-locked: the transforms move them).
     pitch: Vec<u8>,
     bodies: Vec<u8>,
     /// Where the scoreboard floats: above the far touch line.
@@ -176,35 +181,51 @@ pub struct MatchStream {
 fn channel(
     ctx: &Arc<Context>,
     topic: String,
-    schema: &str,
-    data: Vec<u8>,
+    encoding: &str,
+    schema: Schema,
 ) -> anyhow::Result<Arc<RawChannel>> {
     ctx.channel_builder(topic.clone())
-        .message_encoding("json")
-        .schema(Schema::new(schema, "jsonschema", data))
+        .message_encoding(encoding)
+        .schema(schema)
         .build_raw()
         .with_context(|| format!("creating the live channel {topic}"))
 }
 
-const OBJECT: &[u8] = b"{\"type\":\"object\"}";
+/// A naosoccer channel: JSON objects.
+fn json_channel(
+    ctx: &Arc<Context>,
+    topic: String,
+    schema: &str,
+) -> anyhow::Result<Arc<RawChannel>> {
+    let any_object = b"{\"type\":\"object\"}".to_vec();
+    channel(
+        ctx,
+        topic,
+        "json",
+        Schema::new(schema, "jsonschema", any_object),
+    )
+}
+
+/// A Foxglove channel: the SDK's type `T`, protobuf.
+fn foxglove_channel<T: Encode>(
+    ctx: &Arc<Context>,
+    topic: String,
+) -> anyhow::Result<Arc<RawChannel>> {
+    channel(ctx, topic, scene::ENCODING, scene::schema::<T>())
+}
 
 impl MatchStream {
     fn new(ctx: &Arc<Context>, id: u64) -> anyhow::Result<MatchStream> {
         let t = |name: &str| format!("/match/{id}/{name}");
         Ok(MatchStream {
             id,
-            scene: channel(
-                ctx,
-                t("scene"),
-                scene::SCENE_SCHEMA_NAME,
-                scene::scene_schema(),
-            )?,
-            tf: channel(ctx, t("tf"), scene::TF_SCHEMA_NAME, scene::tf_schema())?,
-            state: channel(ctx, t("state"), "naosoccer.State", OBJECT.to_vec())?,
-            score: channel(ctx, t("score"), "naosoccer.Score", OBJECT.to_vec())?,
-            events: channel(ctx, t("events"), "naosoccer.Event", OBJECT.to_vec())?,
-            stats: channel(ctx, t("stats"), "naosoccer.Stats", OBJECT.to_vec())?,
-            log: channel(ctx, t("log"), "foxglove.Log", OBJECT.to_vec())?,
+            scene: foxglove_channel::<SceneUpdate>(ctx, t("scene"))?,
+            tf: foxglove_channel::<FrameTransforms>(ctx, t("tf"))?,
+            state: json_channel(ctx, t("state"), "naosoccer.State")?,
+            score: json_channel(ctx, t("score"), "naosoccer.Score")?,
+            events: json_channel(ctx, t("events"), "naosoccer.Event")?,
+            stats: json_channel(ctx, t("stats"), "naosoccer.Stats")?,
+            log: foxglove_channel::<Log>(ctx, t("log"))?,
             pitch: Vec::new(),
             bodies: Vec::new(),
             board_y: 0.0,
@@ -233,21 +254,12 @@ impl MatchStream {
 
     /// Takes the scene (pitch, robot bodies, ball) from `m` at kick-off.
     pub fn begin(&mut self, m: &Match) {
-        let v: Value = serde_json::from_slice(&scene::scene_update(m)).expect("the scene is JSON");
-        let mut entities = match v.get("entities") {
-            Some(Value::Array(a)) => a.clone(),
-            _ => Vec::new(),
+        let update = |entities| SceneUpdate {
+            deletions: Vec::new(),
+            entities,
         };
-        if !entities.is_empty() {
-            self.pitch = serde_json::to_vec(&entities.remove(0)).expect("JSON");
-        }
-        self.bodies.clear();
-        for (i, e) in entities.iter().enumerate() {
-            if i > 0 {
-                self.bodies.push(b',');
-            }
-            serde_json::to_writer(&mut self.bodies, e).expect("JSON");
-        }
+        self.pitch = scene::encode(&update(vec![scene::pitch(m)]));
+        self.bodies = scene::encode(&update(scene::bodies(m)));
         self.board_y = m.field().half_width + 0.9;
     }
 
@@ -265,14 +277,15 @@ impl MatchStream {
                 }
             }
             if self.log.has_sinks() {
-                let msg = json!({
-                    "timestamp": {"sec": now / 1_000_000_000, "nsec": now % 1_000_000_000},
-                    "level": 2, "name": format!("match {}", self.id),
-                    "message": serde_json::to_string(e).unwrap_or_default(),
-                    "file": "", "line": 0});
-                if let Ok(b) = serde_json::to_vec(&msg) {
-                    self.log.log_with_meta(&b, meta);
-                }
+                let msg = Log {
+                    timestamp: Some(scene::timestamp(now)),
+                    level: log::Level::Info as i32,
+                    message: serde_json::to_string(e).unwrap_or_default(),
+                    name: format!("match {}", self.id),
+                    file: String::new(),
+                    line: 0,
+                };
+                self.log.log_with_meta(&scene::encode(&msg), meta);
             }
         }
     }
@@ -290,22 +303,22 @@ impl MatchStream {
             state.score.blue, state.score.red
         );
         if self.scene.has_sinks() {
-            // {"deletions":[],"entities":[pitch?, bodies, scoreboard]}, the
-            // static parts as bytes serialised once.
+            // One SceneUpdate with the entities [pitch?, bodies, scoreboard]:
+            // the encoded updates one after the other (the static parts
+            // encoded once), as protobuf merges repeated fields by appending.
+            let board = SceneUpdate {
+                deletions: Vec::new(),
+                entities: vec![scoreboard(self.board_y, &text)],
+            };
             let b = &mut self.buf;
             b.clear();
-            b.extend_from_slice(br#"{"deletions":[],"entities":["#);
-            if state.tick.get().is_multiple_of(PITCH_EVERY) && !self.pitch.is_empty() {
+            if state.tick.get().is_multiple_of(PITCH_EVERY) {
                 b.extend_from_slice(&self.pitch);
-                b.push(b',');
             }
-            if !self.bodies.is_empty() {
-                b.extend_from_slice(&self.bodies);
-                b.push(b',');
-            }
-            let board = scoreboard(self.board_y, &text);
-            serde_json::to_writer(&mut *b, &board).expect("JSON");
-            b.extend_from_slice(b"]}");
+            b.extend_from_slice(&self.bodies);
+            board
+                .encode(&mut *b)
+                .expect("encoding into a Vec cannot fail");
             self.scene.log_with_meta(b, meta);
         }
         if self.tf.has_sinks() {
@@ -346,19 +359,17 @@ impl MatchStream {
 }
 
 /// The scoreboard: a text that always faces the camera, above `y`.
-fn scoreboard(y: f32, text: &str) -> Value {
-    json!({
-        "timestamp": {"sec": 0, "nsec": 0}, "frame_id": scene::WORLD_FRAME,
-        "id": "scoreboard", "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false,
-        "metadata": [], "arrows": [], "cubes": [], "spheres": [], "cylinders": [],
-        "lines": [], "triangles": [], "models": [],
-        "texts": [{
-            "pose": {"position": {"x": 0.0, "y": y, "z": 0.6},
-                     "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
-            "billboard": true, "font_size": 28.0, "scale_invariant": true,
-            "color": {"r": 1.0, "g": 1.0, "b": 1.0, "a": 1.0}, "text": text
-        }]
-    })
+fn scoreboard(y: f32, text: &str) -> SceneEntity {
+    let mut e = scene::entity(scene::WORLD_FRAME, "scoreboard", false);
+    e.texts = vec![TextPrimitive {
+        pose: scene::pose(0.0, y, 0.6),
+        billboard: true,
+        font_size: 28.0,
+        scale_invariant: true,
+        color: scene::rgba(1.0, 1.0, 1.0, 1.0),
+        text: text.to_string(),
+    }];
+    e
 }
 
 impl Drop for MatchStream {

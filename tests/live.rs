@@ -2,7 +2,8 @@
 //! (`naosoccer::live::viewer`, which `bench server --viewer` uses too)
 //! speaks the Foxglove SDK's WebSocket protocol (`foxglove.sdk.v1`: JSON
 //! control messages, binary message data) to the real binary on an
-//! ephemeral loopback port.
+//! ephemeral loopback port, and decodes the Foxglove channels' protobuf
+//! with the SDK's types.
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Output, Stdio};
@@ -79,18 +80,31 @@ async fn match_live_streams_the_scene_and_changes_nothing() {
     let (mut ws, ch) = watch(&addr).await;
     let scene = &ch["/match/1/scene"];
     assert_eq!(scene["schemaName"], "foxglove.SceneUpdate");
-    assert_eq!(scene["encoding"], "json");
+    // The SDK's types: protobuf under the SDK's descriptors.
+    assert_eq!(scene["encoding"], "protobuf");
+    assert_eq!(scene["schemaEncoding"], "protobuf");
     assert_eq!(ch["/match/1/tf"]["schemaName"], "foxglove.FrameTransforms");
-    ws.subscribe(&[(1, scene), (2, &ch["/match/1/state"])])
-        .await
-        .unwrap();
+    assert_eq!(ch["/match/1/tf"]["encoding"], "protobuf");
+    assert_eq!(ch["/match/1/state"]["encoding"], "json");
+    ws.subscribe(&[
+        (1, scene),
+        (2, &ch["/match/1/state"]),
+        (3, &ch["/match/1/tf"]),
+    ])
+    .await
+    .unwrap();
 
-    let (mut scenes, mut pitches, mut ticks) = (0, 0, Vec::new());
+    let (mut scenes, mut pitches, mut tfs, mut ticks) = (0, 0, 0, Vec::new());
     while let Some((sub, v)) = ws.next_data().await {
-        // Scenes come before the state of the same tick.
+        // Scenes and transforms come before the state of the same tick.
         if sub == 1 {
             pitches += assert_full_scene(&v).pitch as u32;
             scenes += 1;
+        } else if sub == 3 {
+            let t = v["transforms"].as_array().unwrap();
+            assert_eq!(t.len(), 9, "{v}");
+            assert_eq!(t[8]["child_frame_id"], "ball", "{v}");
+            tfs += 1;
         } else {
             ticks.push(v["tick"].as_u64().unwrap());
             assert_eq!(v["robots"].as_array().unwrap().len(), 8);
@@ -104,6 +118,7 @@ async fn match_live_streams_the_scene_and_changes_nothing() {
     // Kick-off and 300 ticks, every one in order; the pitch once a second.
     assert_eq!(ticks, (0..=300).collect::<Vec<_>>());
     assert_eq!(scenes, 301);
+    assert_eq!(tfs, 301);
     assert_eq!(pitches, 31);
     assert_eq!(
         state_hash(child.wait_with_output().unwrap()),
@@ -171,6 +186,7 @@ async fn replay_live_streams_every_tick_in_order() {
     let (child, addr) = spawn_live(&args);
     let (mut ws, ch) = watch(&addr).await;
     assert_eq!(ch["/match/1/log"]["schemaName"], "foxglove.Log");
+    assert_eq!(ch["/match/1/log"]["encoding"], "protobuf");
     ws.subscribe(&[
         (1, &ch["/match/1/scene"]),
         (2, &ch["/match/1/state"]),

@@ -357,21 +357,27 @@ pub fn bench_sim(args: BenchSimArgs) -> anyhow::Result<()> {
     let m = Match::new(&cfg, args.seed)?;
     let meta = MatchMeta::of(&m, &scripted.to_string(), &scripted.to_string(), "match");
     let start = Instant::now();
+    // The recorder's own time (start, every tick, finish), apart from the
+    // match's: the write time of the recording.
+    let mut writing = Instant::now();
     let mut rec = Some(Recorder::new(
         std::io::Cursor::new(Vec::with_capacity(8 << 20)),
         &meta,
         &m,
         RecorderOptions::default(),
     )?);
+    let mut write_time = writing.elapsed();
     let mut bytes = 0;
     let policies = runner::build_policies(args.seed, &scripted, &scripted);
     let recorded = runner::run_to_end_with(m, policies, |m, actions, events| {
         if let Some(r) = &mut rec {
+            writing = Instant::now();
             r.tick(m, actions, events).expect("recording to memory");
             if m.is_finished() {
                 let (_, cursor) = rec.take().unwrap().finish(m).expect("finishing in memory");
                 bytes = cursor.into_inner().len();
             }
+            write_time += writing.elapsed();
         }
     });
     let with_recording = start.elapsed().as_secs_f64();
@@ -390,6 +396,11 @@ pub fn bench_sim(args: BenchSimArgs) -> anyhow::Result<()> {
         "recording overhead: {:+.1}% ({:.1} MB for the match)",
         100.0 * (with_recording / full.max(1e-9) - 1.0),
         bytes as f64 / 1e6
+    );
+    println!(
+        "recorder's own time: {:.3} s ({:.1} us a tick), {bytes} bytes",
+        write_time.as_secs_f64(),
+        1e6 * write_time.as_secs_f64() / outcome.ticks.max(1) as f64
     );
     println!(
         "match result: blue {} - {} red, state hash {:016x}",

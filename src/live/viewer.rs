@@ -1,12 +1,15 @@
 //! A minimal Foxglove viewer: it speaks the SDK's WebSocket protocol
 //! (`foxglove.sdk.v1`: JSON control messages, binary message data) well
-//! enough to subscribe to a match's channels and read what they carry.
+//! enough to subscribe to a match's channels and read what they carry
+//! (JSON, and the Foxglove SDK's protobuf messages, decoded with its types).
 //! `bench server --viewer` watches its match with it, and the live tests
 //! use it as their viewer.
 
 use std::collections::BTreeMap;
 
 use anyhow::Context as _;
+use foxglove::messages::{FrameTransforms, Log, SceneUpdate};
+use foxglove::Decode;
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{json, Value};
 use tokio::net::TcpStream;
@@ -23,6 +26,8 @@ pub const TOPICS: [&str; 7] = ["scene", "tf", "state", "score", "events", "stats
 /// One viewer connection.
 pub struct Viewer {
     ws: WebSocketStream<TcpStream>,
+    /// Each subscription's message encoding and schema name.
+    subs: BTreeMap<u32, (String, String)>,
 }
 
 impl Viewer {
@@ -43,7 +48,10 @@ impl Viewer {
             proto.is_some_and(|p| p == SUBPROTOCOL),
             "the live server answered with subprotocol {proto:?}, not {SUBPROTOCOL}"
         );
-        Ok(Viewer { ws })
+        Ok(Viewer {
+            ws,
+            subs: BTreeMap::new(),
+        })
     }
 
     /// Reads control messages until all of match `id`'s channels are
@@ -82,6 +90,11 @@ impl Viewer {
             .iter()
             .map(|(sub, c)| json!({"id": sub, "channelId": c["id"]}))
             .collect();
+        for (sub, c) in channels {
+            let field = |k: &str| c[k].as_str().unwrap_or_default().to_string();
+            self.subs
+                .insert(*sub, (field("encoding"), field("schemaName")));
+        }
         let msg = json!({"op": "subscribe", "subscriptions": subs});
         self.ws.send(Message::Text(msg.to_string().into())).await?;
         Ok(())
@@ -104,13 +117,31 @@ impl Viewer {
         }
     }
 
-    /// The next message data frame as (subscription id, payload as JSON).
+    /// The next message data frame as (subscription id, payload as JSON):
+    /// a JSON channel's message as it is, a Foxglove channel's protobuf
+    /// message decoded with the SDK's type and shown as JSON (field names
+    /// as in the schema). Frames that do not decode are skipped.
     pub async fn next_data(&mut self) -> Option<(u32, Value)> {
         loop {
             let (sub, b) = self.next_raw().await?;
-            if let Ok(v) = serde_json::from_slice(&b) {
+            if let Some(v) = self.decode(sub, &b) {
                 return Some((sub, v));
             }
+        }
+    }
+
+    fn decode(&self, sub: u32, b: &[u8]) -> Option<Value> {
+        fn pb<T: Decode + serde::Serialize>(b: &[u8]) -> Option<Value> {
+            serde_json::to_value(T::decode(b).ok()?).ok()
+        }
+        match self.subs.get(&sub) {
+            Some((encoding, schema)) if encoding == "protobuf" => match schema.as_str() {
+                "foxglove.SceneUpdate" => pb::<SceneUpdate>(b),
+                "foxglove.FrameTransforms" => pb::<FrameTransforms>(b),
+                "foxglove.Log" => pb::<Log>(b),
+                _ => None,
+            },
+            _ => serde_json::from_slice(b).ok(),
         }
     }
 

@@ -1,10 +1,11 @@
 """A full 10-minute recording read by the Python `mcap` reader.
 
 Checks what a user outside Rust relies on: message counts per channel equal
-what the writer reported, every naosoccer message parses, the Foxglove
-channels validate against the published Foxglove JSON schemas (the
-`@foxglove/schemas` npm package, installed by scripts/setup), and the file
-stays small.
+what the writer reported, every naosoccer message parses as JSON, the
+Foxglove channels (protobuf, the Foxglove SDK's types) decode with nothing
+but the descriptors the file carries, and what they hold validates against
+the published Foxglove schemas (the `@foxglove/schemas` npm package,
+installed by scripts/setup), and the file stays small.
 """
 
 import json
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import jsonschema
 import pytest
+from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from mcap.reader import make_reader
 
 REPO = Path(__file__).resolve().parents[2]
@@ -44,6 +46,36 @@ def published_schema(name: str) -> dict:
     return json.loads(out.stdout)
 
 
+def protobuf_class(schema):
+    """The message class of a protobuf schema record, from the
+    FileDescriptorSet it carries alone (dependencies come first in it)."""
+    assert schema.encoding == "protobuf"
+    files = descriptor_pb2.FileDescriptorSet.FromString(schema.data)
+    pool = descriptor_pool.DescriptorPool()
+    for f in files.file:
+        pool.Add(f)
+    return message_factory.GetMessageClass(pool.FindMessageTypeByName(schema.name))
+
+
+TIME_TYPES = ("google.protobuf.Timestamp", "google.protobuf.Duration")
+
+
+def foxglove_json(msg) -> dict:
+    """A decoded Foxglove protobuf message in the Foxglove JSON form the
+    published JSON schemas describe: every field present (defaults
+    included), times as {sec, nsec}, enums as their numbers."""
+    if msg.DESCRIPTOR.full_name in TIME_TYPES:
+        return {"sec": msg.seconds, "nsec": msg.nanos}
+    out = {}
+    for field in msg.DESCRIPTOR.fields:
+        value = getattr(msg, field.name)
+        if field.message_type is not None:
+            out[field.name] = [foxglove_json(v) for v in value] if field.is_repeated else foxglove_json(value)
+        else:
+            out[field.name] = list(value) if field.is_repeated else value
+    return out
+
+
 @pytest.fixture(scope="module")
 def full_match(tmp_path_factory):
     path = tmp_path_factory.mktemp("rec") / "full.mcap"
@@ -66,6 +98,10 @@ def test_counts_match_the_writer_and_messages_parse(full_match):
         reader = make_reader(f)
         for schema, channel, message in reader.iter_messages():
             counts[channel.topic] += 1
+            if channel.topic.startswith("/foxglove/"):
+                assert channel.message_encoding == "protobuf"
+                assert schema.encoding == "protobuf"
+                continue
             assert channel.message_encoding == "json"
             assert schema.encoding == "jsonschema"
             data = json.loads(message.data)
@@ -80,24 +116,35 @@ def test_counts_match_the_writer_and_messages_parse(full_match):
     assert final["score"] == report["score"]
 
 
-def test_foxglove_channels_validate_against_published_schemas(full_match):
+def test_foxglove_channels_decode_and_validate_against_published_schemas(full_match):
     path, _ = full_match
     scene = published_schema("SceneUpdate")
     tf = published_schema("FrameTransforms")
     scene_v = jsonschema.Draft202012Validator(scene)
     tf_v = jsonschema.Draft202012Validator(tf)
     seen = Counter()
+    classes = {}
     with open(path, "rb") as f:
         reader = make_reader(f)
         for schema, channel, message in reader.iter_messages(topics=["/foxglove/scene", "/foxglove/tf"]):
-            data = json.loads(message.data)
+            if schema.id not in classes:
+                classes[schema.id] = protobuf_class(schema)
+            decoded = classes[schema.id].FromString(message.data)
+            # Nothing left over: every byte is a field of the schema.
+            assert decoded.SerializeToString() == message.data
+            data = foxglove_json(decoded)
             if channel.topic == "/foxglove/scene":
                 assert schema.name == "foxglove.SceneUpdate"
                 scene_v.validate(data)
+                ids = [e["id"] for e in data["entities"]]
+                assert ids == ["pitch"] + [f"robot_{i}" for i in range(8)] + ["ball"]
             else:
                 assert schema.name == "foxglove.FrameTransforms"
                 tf_v.validate(data)
                 assert len(data["transforms"]) == 9
+                stamp = data["transforms"][0]["timestamp"]
+                # Game time: tick t at t / 10 s.
+                assert stamp["sec"] * 10**9 + stamp["nsec"] == message.log_time
             seen[channel.topic] += 1
     assert seen["/foxglove/scene"] >= 1
     assert seen["/foxglove/tf"] == 6001

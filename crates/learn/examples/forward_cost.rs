@@ -19,15 +19,25 @@ use naosoccer_proto::Team;
 use naosoccer_referee::{Match, MatchConfig};
 use tch::Kind;
 
+/// Microseconds per call of `f`: the median over 21 batches of `iters / 21`
+/// calls each, after a warm-up, so that a busy machine's preemptions (which
+/// land in a few batches) do not move the figure much.
 fn per_call(iters: u32, mut f: impl FnMut()) -> f64 {
     for _ in 0..iters / 10 {
         f();
     }
-    let start = Instant::now();
-    for _ in 0..iters {
-        f();
-    }
-    start.elapsed().as_secs_f64() / f64::from(iters) * 1e6
+    let batch = (iters / 21).max(1);
+    let mut times: Vec<f64> = (0..21)
+        .map(|_| {
+            let start = Instant::now();
+            for _ in 0..batch {
+                f();
+            }
+            start.elapsed().as_secs_f64() / f64::from(batch) * 1e6
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
 }
 
 /// `75-128-128-5`.
@@ -49,7 +59,10 @@ fn main() {
         m.step(&[naosoccer_proto::Action::Forward; 8]);
     }
     let obs: Vec<_> = (0..4).map(|p| m.observe(Team::Blue, p)).collect();
-    println!("one decision for a team of 4 robots (4 observation rows), microseconds per call");
+    println!(
+        "one decision for a team of 4 robots (4 observation rows), microseconds per call \
+         (median of 21 batches)"
+    );
     println!(
         "  {:<16} {:>24} {:>9} {:>10} {:>9}",
         "team", "networks", "tch", "pure Rust", "speed-up"

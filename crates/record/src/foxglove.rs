@@ -3,21 +3,32 @@
 //! The scene is sent once (`foxglove.SceneUpdate`): the pitch in the `world`
 //! frame, each robot and the ball as frame-locked primitives in a frame of
 //! their own. Every tick then only moves those frames
-//! (`foxglove.FrameTransforms`), which keeps recording cheap. The schemas
-//! written into the file describe exactly the fields we emit, under the
-//! published schema names, so Foxglove and Lichtblick pick their renderers;
-//! a test checks the messages against the published schemas.
+//! (`foxglove.FrameTransforms`), which keeps recording cheap.
+//!
+//! The messages are the Foxglove SDK's own types (`foxglove::messages`),
+//! encoded as protobuf, and a channel's schema is the SDK's protobuf
+//! descriptor of its type ([`schema`]), under the published schema name: no
+//! hand-written schema can drift from what Foxglove and Lichtblick expect.
+//! Protobuf encoding is a pure function of the message (fields in tag
+//! order, no maps, the descriptors are constants), so the same match still
+//! gives the same bytes.
 
-use std::io::Write;
-
+use ::foxglove::messages::{
+    line_primitive, ArrowPrimitive, Color, CubePrimitive, CylinderPrimitive, FrameTransform,
+    FrameTransforms, KeyValuePair, LinePrimitive, Point3, Pose, Quaternion, SceneEntity,
+    SceneUpdate, SpherePrimitive, Timestamp, Vector3,
+};
+use ::foxglove::{Encode, Schema};
 use naosoccer_proto::{Team, ROBOTS};
 use naosoccer_referee::Match;
-use serde_json::{json, Value};
 
 use crate::messages::StateRecord;
 
 pub const SCENE_SCHEMA_NAME: &str = "foxglove.SceneUpdate";
 pub const TF_SCHEMA_NAME: &str = "foxglove.FrameTransforms";
+/// The message encoding of the Foxglove channels (their schemas' encoding
+/// is `protobuf` too).
+pub const ENCODING: &str = "protobuf";
 
 /// Frame ids of the robots, by robot index.
 pub const ROBOT_FRAMES: [&str; ROBOTS] = [
@@ -26,158 +37,100 @@ pub const ROBOT_FRAMES: [&str; ROBOTS] = [
 pub const BALL_FRAME: &str = "ball";
 pub const WORLD_FRAME: &str = "world";
 
-fn vec3_schema() -> Value {
-    json!({"type": "object", "required": ["x", "y", "z"],
-           "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}})
+/// The SDK's schema of a Foxglove message type: its published name
+/// (`foxglove.SceneUpdate`, ...), encoding `protobuf`, and the protobuf
+/// descriptor (a `FileDescriptorSet`) as data.
+pub fn schema<T: Encode>() -> Schema {
+    T::get_schema().expect("the SDK's Foxglove types have schemas")
 }
 
-fn quat_schema() -> Value {
-    json!({"type": "object", "required": ["x", "y", "z", "w"],
-           "properties": {"x": {"type": "number"}, "y": {"type": "number"},
-                          "z": {"type": "number"}, "w": {"type": "number"}}})
+/// `msg` protobuf-encoded into `out` (cleared first).
+pub fn encode_into<T: Encode>(out: &mut Vec<u8>, msg: &T) {
+    out.clear();
+    // Only a full fixed-size buffer fails; a Vec grows.
+    msg.encode(out).expect("encoding into a Vec cannot fail");
 }
 
-fn color_schema() -> Value {
-    json!({"type": "object", "required": ["r", "g", "b", "a"],
-           "properties": {"r": {"type": "number"}, "g": {"type": "number"},
-                          "b": {"type": "number"}, "a": {"type": "number"}}})
+/// `msg` protobuf-encoded.
+pub fn encode<T: Encode>(msg: &T) -> Vec<u8> {
+    let mut out = Vec::with_capacity(msg.encoded_len().unwrap_or(256));
+    encode_into(&mut out, msg);
+    out
 }
 
-fn time_schema() -> Value {
-    json!({"type": "object", "required": ["sec", "nsec"],
-           "properties": {"sec": {"type": "integer", "minimum": 0},
-                          "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999}}})
+/// A protobuf timestamp of `ns` nanoseconds (game time in a recording,
+/// Unix time live).
+pub fn timestamp(ns: u64) -> Timestamp {
+    Timestamp::new((ns / 1_000_000_000) as u32, (ns % 1_000_000_000) as u32)
 }
 
-fn pose_schema() -> Value {
-    json!({"type": "object", "required": ["position", "orientation"],
-           "properties": {"position": vec3_schema(), "orientation": quat_schema()}})
+fn vec3(x: f32, y: f32, z: f32) -> Option<Vector3> {
+    Some(Vector3 {
+        x: x.into(),
+        y: y.into(),
+        z: z.into(),
+    })
 }
 
-fn shape_schema(extra: &[(&str, Value)]) -> Value {
-    let mut props = serde_json::Map::new();
-    props.insert("pose".into(), pose_schema());
-    props.insert("size".into(), vec3_schema());
-    props.insert("color".into(), color_schema());
-    let mut required = vec![json!("pose"), json!("size"), json!("color")];
-    for (k, v) in extra {
-        props.insert((*k).into(), v.clone());
-        required.push(json!(k));
+/// An upright pose at (x, y, z).
+pub fn pose(x: f32, y: f32, z: f32) -> Option<Pose> {
+    Some(Pose {
+        position: vec3(x, y, z),
+        orientation: Some(Quaternion {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0,
+        }),
+    })
+}
+
+pub fn rgba(r: f32, g: f32, b: f32, a: f32) -> Option<Color> {
+    Some(Color {
+        r: r.into(),
+        g: g.into(),
+        b: b.into(),
+        a: a.into(),
+    })
+}
+
+/// An empty entity `id` in `frame`, stamped at time 0 (it lives until
+/// replaced).
+pub fn entity(frame: &str, id: &str, frame_locked: bool) -> SceneEntity {
+    SceneEntity {
+        timestamp: Some(timestamp(0)),
+        frame_id: frame.into(),
+        id: id.into(),
+        frame_locked,
+        ..SceneEntity::default()
     }
-    json!({"type": "object", "required": required, "properties": props})
 }
 
-/// JSON Schema (draft 2020-12 subset) of the `foxglove.SceneUpdate` messages we write.
-pub fn scene_schema() -> Vec<u8> {
-    let line = json!({"type": "object",
-        "required": ["type", "pose", "thickness", "scale_invariant", "points", "color", "colors", "indices"],
-        "properties": {
-            "type": {"type": "integer", "enum": [0, 1, 2]},
-            "pose": pose_schema(), "thickness": {"type": "number"},
-            "scale_invariant": {"type": "boolean"},
-            "points": {"type": "array", "items": vec3_schema()},
-            "color": color_schema(),
-            "colors": {"type": "array", "items": color_schema()},
-            "indices": {"type": "array", "items": {"type": "integer", "minimum": 0}}}});
-    let arrow = json!({"type": "object",
-        "required": ["pose", "shaft_length", "shaft_diameter", "head_length", "head_diameter", "color"],
-        "properties": {"pose": pose_schema(), "shaft_length": {"type": "number"},
-            "shaft_diameter": {"type": "number"}, "head_length": {"type": "number"},
-            "head_diameter": {"type": "number"}, "color": color_schema()}});
-    let any_array = json!({"type": "array"});
-    let entity = json!({"type": "object",
-        "required": ["timestamp", "frame_id", "id", "lifetime", "frame_locked", "metadata",
-                     "arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models"],
-        "properties": {
-            "timestamp": time_schema(), "frame_id": {"type": "string"}, "id": {"type": "string"},
-            "lifetime": time_schema(), "frame_locked": {"type": "boolean"},
-            "metadata": {"type": "array", "items": {"type": "object", "required": ["key", "value"],
-                "properties": {"key": {"type": "string"}, "value": {"type": "string"}}}},
-            "arrows": {"type": "array", "items": arrow},
-            "cubes": {"type": "array", "items": shape_schema(&[])},
-            "spheres": {"type": "array", "items": shape_schema(&[])},
-            "cylinders": {"type": "array", "items": shape_schema(&[
-                ("bottom_scale", json!({"type": "number"})), ("top_scale", json!({"type": "number"}))])},
-            "lines": {"type": "array", "items": line},
-            "triangles": any_array, "texts": any_array, "models": any_array}});
-    let schema = json!({
-        "title": SCENE_SCHEMA_NAME,
-        "description": "An update to the entities displayed in a 3D scene (the fields naosoccer writes)",
-        "type": "object", "required": ["deletions", "entities"],
-        "properties": {"deletions": {"type": "array"}, "entities": {"type": "array", "items": entity}}});
-    serde_json::to_vec(&schema).expect("static schema serialises")
-}
-
-/// JSON Schema of the `foxglove.FrameTransforms` messages we write.
-pub fn tf_schema() -> Vec<u8> {
-    let schema = json!({
-        "title": TF_SCHEMA_NAME,
-        "description": "An array of FrameTransform messages",
-        "type": "object", "required": ["transforms"],
-        "properties": {"transforms": {"type": "array", "items": {
-            "type": "object",
-            "required": ["timestamp", "parent_frame_id", "child_frame_id", "translation", "rotation"],
-            "properties": {"timestamp": time_schema(), "parent_frame_id": {"type": "string"},
-                "child_frame_id": {"type": "string"}, "translation": vec3_schema(),
-                "rotation": quat_schema()}}}}});
-    serde_json::to_vec(&schema).expect("static schema serialises")
-}
-
-fn time(ns: u64) -> Value {
-    json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000})
-}
-
-fn pose(x: f32, y: f32, z: f32) -> Value {
-    json!({"position": {"x": x, "y": y, "z": z}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}})
-}
-
-fn rgba(r: f32, g: f32, b: f32, a: f32) -> Value {
-    json!({"r": r, "g": g, "b": b, "a": a})
-}
-
-fn entity(ns: u64, frame: &str, id: &str, frame_locked: bool) -> serde_json::Map<String, Value> {
-    let mut e = serde_json::Map::new();
-    e.insert("timestamp".into(), time(ns));
-    e.insert("frame_id".into(), json!(frame));
-    e.insert("id".into(), json!(id));
-    e.insert("lifetime".into(), time(0));
-    e.insert("frame_locked".into(), json!(frame_locked));
-    for k in [
-        "metadata",
-        "arrows",
-        "cubes",
-        "spheres",
-        "cylinders",
-        "lines",
-        "triangles",
-        "texts",
-        "models",
-    ] {
-        e.insert(k.into(), json!([]));
+fn cube(x: f32, y: f32, z: f32, sx: f32, sy: f32, sz: f32, color: Option<Color>) -> CubePrimitive {
+    CubePrimitive {
+        pose: pose(x, y, z),
+        size: vec3(sx, sy, sz),
+        color,
     }
-    e
 }
 
-fn cube(x: f32, y: f32, z: f32, sx: f32, sy: f32, sz: f32, color: Value) -> Value {
-    json!({"pose": pose(x, y, z), "size": {"x": sx, "y": sy, "z": sz}, "color": color})
-}
-
-fn team_color(team: Team) -> Value {
+fn team_color(team: Team) -> Option<Color> {
     match team {
         Team::Blue => rgba(0.15, 0.35, 0.95, 1.0),
         Team::Red => rgba(0.9, 0.15, 0.15, 1.0),
     }
 }
 
-/// The whole scene, sent once at the start.
-pub fn scene_update(m: &Match) -> Vec<u8> {
+/// The pitch: grass, lines and the two goals (posts, crossbar, a
+/// translucent net box behind each line), in the `world` frame.
+pub fn pitch(m: &Match) -> SceneEntity {
     let f = m.field();
     let sim = &m.config().sim;
     let (hl, hw) = (f.half_length, f.half_width);
     let margin = sim.ground_margin;
     let white = rgba(1.0, 1.0, 1.0, 1.0);
 
-    let mut pitch = entity(0, WORLD_FRAME, "pitch", false);
+    let mut pitch = entity(WORLD_FRAME, "pitch", false);
     let grass = cube(
         0.0,
         0.0,
@@ -187,7 +140,11 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
         0.01,
         rgba(0.1, 0.5, 0.15, 1.0),
     );
-    let p = |x: f32, y: f32| json!({"x": x, "y": y, "z": 0.002});
+    let p = |x: f32, y: f32| Point3 {
+        x: x.into(),
+        y: y.into(),
+        z: 0.002f32.into(),
+    };
     let mut segs = vec![
         p(-hl, -hw),
         p(hl, -hw),
@@ -208,11 +165,17 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
         segs.push(p(r * a0.cos(), r * a0.sin()));
         segs.push(p(r * a1.cos(), r * a1.sin()));
     }
-    let lines = json!([{"type": 2, "pose": pose(0.0, 0.0, 0.0), "thickness": 0.05,
-        "scale_invariant": false, "points": segs, "color": white, "colors": [], "indices": []}]);
-    pitch.insert("lines".into(), lines);
+    pitch.lines = vec![LinePrimitive {
+        r#type: line_primitive::Type::LineList as i32,
+        pose: pose(0.0, 0.0, 0.0),
+        thickness: 0.05f32.into(),
+        scale_invariant: false,
+        points: segs,
+        color: white,
+        colors: Vec::new(),
+        indices: Vec::new(),
+    }];
 
-    // Goals: posts, crossbar and a translucent net box behind each line.
     let gw = f.goal_half_width;
     let gh = f.crossbar;
     let post = sim.goal_post_size;
@@ -228,7 +191,7 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
                 post,
                 post,
                 gh + post,
-                white.clone(),
+                white,
             ));
         }
         cubes.push(cube(
@@ -238,7 +201,7 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
             post,
             2.0 * gw + 2.0 * post,
             post,
-            white.clone(),
+            white,
         ));
         cubes.push(cube(
             side * (hl + depth / 2.0),
@@ -250,9 +213,15 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
             rgba(0.9, 0.9, 0.9, 0.25),
         ));
     }
-    pitch.insert("cubes".into(), Value::Array(cubes));
+    pitch.cubes = cubes;
+    pitch
+}
 
-    let mut entities = vec![Value::Object(pitch)];
+/// The robots (`robot_0`…`robot_7`) and the ball (`ball`), each a
+/// frame-locked entity in its own frame: the transforms move them.
+pub fn bodies(m: &Match) -> Vec<SceneEntity> {
+    let f = m.field();
+    let mut entities = Vec::with_capacity(ROBOTS + 1);
     for (i, frame) in ROBOT_FRAMES.iter().enumerate() {
         let team = if i < ROBOTS / 2 {
             Team::Blue
@@ -260,80 +229,102 @@ pub fn scene_update(m: &Match) -> Vec<u8> {
             Team::Red
         };
         let color = team_color(team);
-        let mut e = entity(0, frame, frame, true);
+        let mut e = entity(frame, frame, true);
         // Torso origin is the frame origin; legs below, head above (NAO H25
         // proportions: torso origin about 0.33 m up, 0.57 m standing height).
-        e.insert(
-            "cylinders".into(),
-            json!([{"pose": pose(0.0, 0.0, -0.17), "size": {"x": 0.16, "y": 0.2, "z": 0.32},
-                "bottom_scale": 1.0, "top_scale": 1.0, "color": color.clone()}]),
-        );
-        e.insert(
-            "cubes".into(),
-            json!([cube(0.0, 0.0, 0.06, 0.1, 0.16, 0.2, color.clone())]),
-        );
-        e.insert(
-            "spheres".into(),
-            json!([{"pose": pose(0.0, 0.0, 0.21), "size": {"x": 0.12, "y": 0.12, "z": 0.12},
-                "color": rgba(0.92, 0.92, 0.92, 1.0)}]),
-        );
-        e.insert(
-            "arrows".into(),
-            json!([{"pose": pose(0.05, 0.0, 0.06), "shaft_length": 0.12, "shaft_diameter": 0.02,
-                "head_length": 0.05, "head_diameter": 0.05, "color": rgba(1.0, 0.85, 0.1, 1.0)}]),
-        );
-        e.insert(
-            "metadata".into(),
-            json!([{"key": "team", "value": team.to_string()},
-                   {"key": "player", "value": (i % (ROBOTS / 2)).to_string()}]),
-        );
-        entities.push(Value::Object(e));
+        e.cylinders = vec![CylinderPrimitive {
+            pose: pose(0.0, 0.0, -0.17),
+            size: vec3(0.16, 0.2, 0.32),
+            bottom_scale: 1.0,
+            top_scale: 1.0,
+            color,
+        }];
+        e.cubes = vec![cube(0.0, 0.0, 0.06, 0.1, 0.16, 0.2, color)];
+        e.spheres = vec![SpherePrimitive {
+            pose: pose(0.0, 0.0, 0.21),
+            size: vec3(0.12, 0.12, 0.12),
+            color: rgba(0.92, 0.92, 0.92, 1.0),
+        }];
+        e.arrows = vec![ArrowPrimitive {
+            pose: pose(0.05, 0.0, 0.06),
+            shaft_length: 0.12f32.into(),
+            shaft_diameter: 0.02f32.into(),
+            head_length: 0.05f32.into(),
+            head_diameter: 0.05f32.into(),
+            color: rgba(1.0, 0.85, 0.1, 1.0),
+        }];
+        e.metadata = vec![
+            KeyValuePair {
+                key: "team".into(),
+                value: team.to_string(),
+            },
+            KeyValuePair {
+                key: "player".into(),
+                value: (i % (ROBOTS / 2)).to_string(),
+            },
+        ];
+        entities.push(e);
     }
-    let mut ball = entity(0, BALL_FRAME, "ball", true);
+    let mut ball = entity(BALL_FRAME, BALL_FRAME, true);
     let d = 2.0 * f.ball_radius;
-    ball.insert(
-        "spheres".into(),
-        json!([{"pose": pose(0.0, 0.0, 0.0), "size": {"x": d, "y": d, "z": d},
-            "color": rgba(1.0, 0.55, 0.0, 1.0)}]),
-    );
-    entities.push(Value::Object(ball));
-    serde_json::to_vec(&json!({"deletions": [], "entities": entities})).expect("scene serialises")
+    ball.spheres = vec![SpherePrimitive {
+        pose: pose(0.0, 0.0, 0.0),
+        size: vec3(d, d, d),
+        color: rgba(1.0, 0.55, 0.0, 1.0),
+    }];
+    entities.push(ball);
+    entities
 }
 
-/// This tick's frame transforms, written into `out` (cleared first) without
-/// building a JSON tree: it runs every tick.
-pub fn write_transforms(out: &mut Vec<u8>, ns: u64, s: &StateRecord) {
-    out.clear();
-    let (sec, nsec) = (ns / 1_000_000_000, ns % 1_000_000_000);
-    let tf = |out: &mut Vec<u8>, child: &str, t: [f32; 3], q: [f32; 4], last: bool| {
-        // `{:?}` prints f32 in shortest round-trip form, which JSON accepts
-        // as long as the value is finite (physics state always is).
-        let _ = write!(
-            out,
-            r#"{{"timestamp":{{"sec":{sec},"nsec":{nsec}}},"parent_frame_id":"world","child_frame_id":"{child}","translation":{{"x":{:?},"y":{:?},"z":{:?}}},"rotation":{{"x":{:?},"y":{:?},"z":{:?},"w":{:?}}}}}{}"#,
-            t[0],
-            t[1],
-            t[2],
-            q[0],
-            q[1],
-            q[2],
-            q[3],
-            if last { "" } else { "," }
-        );
-    };
-    out.extend_from_slice(br#"{"transforms":["#);
-    for (i, r) in s.robots.iter().enumerate() {
-        tf(out, ROBOT_FRAMES[i], [r.x, r.y, r.z], r.rotation, false);
+/// The whole scene, sent once at the start: the pitch, then the robots and
+/// the ball.
+pub fn scene_update(m: &Match) -> SceneUpdate {
+    let mut entities = vec![pitch(m)];
+    entities.extend(bodies(m));
+    SceneUpdate {
+        deletions: Vec::new(),
+        entities,
     }
+}
+
+/// This tick's frame transforms, `world` → `robot_i` (the recorded torso
+/// position and `rotation`) and `world` → `ball`, stamped `ns`.
+pub fn transforms(ns: u64, s: &StateRecord) -> FrameTransforms {
+    let stamp = Some(timestamp(ns));
+    let tf = |child: &str, t: [f32; 3], q: [f32; 4]| FrameTransform {
+        timestamp: stamp,
+        parent_frame_id: WORLD_FRAME.into(),
+        child_frame_id: child.into(),
+        translation: vec3(t[0], t[1], t[2]),
+        rotation: Some(Quaternion {
+            x: q[0].into(),
+            y: q[1].into(),
+            z: q[2].into(),
+            w: q[3].into(),
+        }),
+    };
+    let mut transforms: Vec<FrameTransform> = s
+        .robots
+        .iter()
+        .zip(ROBOT_FRAMES)
+        .map(|(r, frame)| tf(frame, [r.x, r.y, r.z], r.rotation))
+        .collect();
     let b = &s.ball;
-    tf(out, BALL_FRAME, [b.x, b.y, b.z], [0.0, 0.0, 0.0, 1.0], true);
-    out.extend_from_slice(b"]}");
+    transforms.push(tf(BALL_FRAME, [b.x, b.y, b.z], [0.0, 0.0, 0.0, 1.0]));
+    FrameTransforms { transforms }
+}
+
+/// [`transforms`] protobuf-encoded into `out` (cleared first): it runs
+/// every tick.
+pub fn write_transforms(out: &mut Vec<u8>, ns: u64, s: &StateRecord) {
+    encode_into(out, &transforms(ns, s));
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::messages::{BallRecord, ScoreRecord};
+    use ::foxglove::Decode;
     use naosoccer_proto::Tick;
 
     fn state(rotation: [f32; 4]) -> StateRecord {
@@ -374,17 +365,54 @@ mod tests {
         let on_back = [0.0, -h.sin(), 0.0, h.cos()];
         let mut out = Vec::new();
         write_transforms(&mut out, 300_000_000, &state(on_back));
-        let v: Value = serde_json::from_slice(&out).unwrap();
-        let r = &v["transforms"][0]["rotation"];
-        let got = [
-            r["x"].as_f64().unwrap(),
-            r["y"].as_f64().unwrap(),
-            r["z"].as_f64().unwrap(),
-            r["w"].as_f64().unwrap(),
-        ];
+        let v = FrameTransforms::decode(out.as_slice()).unwrap();
+        let t = &v.transforms[0];
+        let r = t.rotation.unwrap();
+        let got = [r.x, r.y, r.z, r.w];
         for (g, w) in got.iter().zip(on_back) {
             assert!((*g as f32 - w).abs() < 1e-6, "{got:?}");
         }
-        assert_eq!(v["transforms"][0]["child_frame_id"], "robot_0");
+        assert_eq!(t.child_frame_id, "robot_0");
+        assert_eq!(t.parent_frame_id, "world");
+        assert_eq!(t.timestamp, Some(Timestamp::new(0, 300_000_000)));
+        assert_eq!(v.transforms.len(), ROBOTS + 1);
+        assert_eq!(v.transforms[ROBOTS].child_frame_id, "ball");
+    }
+
+    /// The channels' schemas are the SDK's protobuf descriptors under the
+    /// published names.
+    #[test]
+    fn schemas_are_the_sdks_protobuf_descriptors() {
+        let scene = schema::<SceneUpdate>();
+        assert_eq!(scene.name, SCENE_SCHEMA_NAME);
+        assert_eq!(scene.encoding, ENCODING);
+        let tf = schema::<FrameTransforms>();
+        assert_eq!(tf.name, TF_SCHEMA_NAME);
+        assert_eq!(tf.encoding, ENCODING);
+        // A FileDescriptorSet naming the message's package file.
+        let needle = b"foxglove/SceneUpdate.proto";
+        assert!(scene.data.windows(needle.len()).any(|w| w == needle));
+    }
+
+    /// Encoding is a pure function of the scene: the same match, the same
+    /// bytes; and they decode to the pitch, eight robots and the ball.
+    #[test]
+    fn the_scene_encodes_repeatably_and_decodes_whole() {
+        let cfg = naosoccer_referee::MatchConfig::default();
+        let a = encode(&scene_update(&Match::new(&cfg, 1).unwrap()));
+        let b = encode(&scene_update(&Match::new(&cfg, 1).unwrap()));
+        assert_eq!(a, b);
+        let s = SceneUpdate::decode(a.as_slice()).unwrap();
+        let ids: Vec<&str> = s.entities.iter().map(|e| e.id.as_str()).collect();
+        assert_eq!(
+            ids,
+            [
+                "pitch", "robot_0", "robot_1", "robot_2", "robot_3", "robot_4", "robot_5",
+                "robot_6", "robot_7", "ball"
+            ]
+        );
+        assert_eq!(s.entities[0].cubes.len(), 1 + 2 * 4, "grass and two goals");
+        assert_eq!(s.entities[0].lines[0].points.len(), 10 + 64);
+        assert!(s.entities[1..].iter().all(|e| e.frame_locked));
     }
 }

@@ -5,7 +5,8 @@
 //!   teams, versions), each control tick's applied actions (all that
 //!   re-simulation needs), each tick's state with its hash, referee events,
 //!   the final statistics, and Foxglove channels (`foxglove.SceneUpdate`,
-//!   `foxglove.FrameTransforms`, JSON) so a file opens as a 3D scene.
+//!   `foxglove.FrameTransforms`: the Foxglove SDK's types, protobuf) so a
+//!   file opens as a 3D scene.
 //! - [`Recording::read`] reads one back, also a file cut short by a killed
 //!   writer (it keeps every completed chunk and says it was truncated).
 //! - [`replay`] re-simulates a recording and reports the first tick whose
@@ -24,7 +25,7 @@ mod writer;
 
 pub use messages::{
     BallRecord, FinalRecord, MatchMeta, RobotRecord, ScoreRecord, StateRecord, TickActions,
-    RECORDING_FORMAT,
+    OLDEST_READABLE_FORMAT, RECORDING_FORMAT,
 };
 pub use reader::Recording;
 pub use replay::{replay, ReplayOutcome};
@@ -58,8 +59,12 @@ pub enum RecordError {
     },
     #[error("not a naosoccer recording: {0}")]
     NotARecording(String),
-    #[error("recording format {found} is not supported (this build reads {supported})")]
-    UnsupportedFormat { found: u32, supported: u32 },
+    #[error("recording format {found} is not supported (this build reads {oldest} to {newest})")]
+    UnsupportedFormat {
+        found: u32,
+        oldest: u32,
+        newest: u32,
+    },
     #[error("cannot re-create the match: {0}")]
     Match(#[from] naosoccer_referee::MatchError),
 }

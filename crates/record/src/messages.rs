@@ -7,8 +7,14 @@ use serde::{Deserialize, Serialize};
 /// Version of the channel layout; bumped when a message changes incompatibly,
 /// or when the physics changes so that older recordings no longer replay.
 /// 2: robots carry their torso `rotation`; feet, contacts and placements of
-/// issue 12.
-pub const RECORDING_FORMAT: u32 = 2;
+/// issue 12. 3: the Foxglove channels are the Foxglove SDK's protobuf types
+/// (issue 16); the naosoccer channels are those of format 2.
+pub const RECORDING_FORMAT: u32 = 3;
+
+/// The oldest format this build reads and replays: format 2's naosoccer
+/// channels are format 3's (only the Foxglove channels, which reading
+/// skips, changed).
+pub const OLDEST_READABLE_FORMAT: u32 = 2;
 
 /// `/match/meta`, once at the start: everything re-simulation needs besides
 /// the actions, and who played.

@@ -7,7 +7,9 @@ use mcap::read::Options;
 use naosoccer_proto::Event;
 use serde::de::DeserializeOwned;
 
-use crate::messages::{FinalRecord, MatchMeta, StateRecord, TickActions, RECORDING_FORMAT};
+use crate::messages::{
+    FinalRecord, MatchMeta, StateRecord, TickActions, OLDEST_READABLE_FORMAT, RECORDING_FORMAT,
+};
 use crate::{topics, RecordError};
 
 /// A recording's naosoccer channels, in order.
@@ -79,10 +81,11 @@ impl Recording {
         }
         let meta =
             meta.ok_or_else(|| RecordError::NotARecording(format!("no {} message", topics::META)))?;
-        if meta.format != RECORDING_FORMAT {
+        if !(OLDEST_READABLE_FORMAT..=RECORDING_FORMAT).contains(&meta.format) {
             return Err(RecordError::UnsupportedFormat {
                 found: meta.format,
-                supported: RECORDING_FORMAT,
+                oldest: OLDEST_READABLE_FORMAT,
+                newest: RECORDING_FORMAT,
             });
         }
         Ok(Recording {

@@ -5,6 +5,7 @@ use std::fs::File;
 use std::io::{Seek, Write};
 use std::path::Path;
 
+use ::foxglove::messages::{FrameTransforms, SceneUpdate};
 use mcap::records::MessageHeader;
 use mcap::{Compression, WriteOptions, Writer};
 use naosoccer_proto::{Action, Event, Tick, ROBOTS};
@@ -122,20 +123,27 @@ impl<W: Write + Seek> Recorder<W> {
             "naosoccer.FinalStats",
             b"{\"type\":\"object\"}",
         )?;
-        let scene_s = json_schema(
-            &mut writer,
-            foxglove::SCENE_SCHEMA_NAME,
-            &foxglove::scene_schema(),
-        )?;
-        let tf_s = json_schema(
-            &mut writer,
-            foxglove::TF_SCHEMA_NAME,
-            &foxglove::tf_schema(),
-        )?;
+        // The Foxglove channels: the SDK's schemas (protobuf descriptors,
+        // constants of the SDK build) and its protobuf messages.
+        let sdk_schema =
+            |w: &mut Writer<W>, s: ::foxglove::Schema| w.add_schema(&s.name, &s.encoding, &s.data);
+        let scene_s = sdk_schema(&mut writer, foxglove::schema::<SceneUpdate>())?;
+        let tf_s = sdk_schema(&mut writer, foxglove::schema::<FrameTransforms>())?;
         let schemas = [meta_s, act_s, state_s, event_s, stats_s, scene_s, tf_s];
         let mut channel_ids = [0u16; 7];
+        let json = "json";
+        let encodings = [
+            json,
+            json,
+            json,
+            json,
+            json,
+            foxglove::ENCODING,
+            foxglove::ENCODING,
+        ];
         for (i, topic) in topics::ALL.iter().enumerate() {
-            channel_ids[i] = writer.add_channel(schemas[i], topic, "json", &BTreeMap::new())?;
+            channel_ids[i] =
+                writer.add_channel(schemas[i], topic, encodings[i], &BTreeMap::new())?;
         }
         let tick_ns = (1e9 / f64::from(meta.control_hz)).round() as u64;
         let mut rec = Recorder {
@@ -149,7 +157,7 @@ impl<W: Write + Seek> Recorder<W> {
         };
         rec.write_json(Ch::Meta, 0, meta)?;
         if rec.opts.foxglove {
-            let scene = foxglove::scene_update(m);
+            let scene = foxglove::encode(&foxglove::scene_update(m));
             rec.write_raw(Ch::Scene, 0, &scene)?;
         }
         rec.write_state(m)?;

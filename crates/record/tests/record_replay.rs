@@ -161,3 +161,114 @@ fn cut_short_recording_keeps_completed_chunks() {
 fn garbage_is_not_a_recording() {
     assert!(Recording::read(b"not an mcap file at all").is_err());
 }
+
+/// The Foxglove channels are the SDK's: protobuf messages of its types under
+/// its schemas (published name, `protobuf`, the SDK's descriptor), with the
+/// scene and every tick's transforms in them; the naosoccer channels stay
+/// JSON.
+#[test]
+fn foxglove_channels_are_the_sdks_protobuf_types() {
+    use foxglove::messages::{FrameTransforms, SceneUpdate};
+    use foxglove::{Decode, Encode};
+
+    let cfg = short_config(5.0);
+    let (bytes, _) = record(&cfg, 2, RecorderOptions::default());
+    let (mut scenes, mut tfs, mut json) = (0, 0, 0);
+    for msg in mcap::MessageStream::new(&bytes).unwrap() {
+        let msg = msg.unwrap();
+        let ch = &msg.channel;
+        let schema = ch.schema.as_ref().expect("every channel has a schema");
+        let sdk = |s: foxglove::Schema| {
+            assert_eq!(schema.name, s.name, "{}", ch.topic);
+            assert_eq!(schema.encoding, "protobuf", "{}", ch.topic);
+            assert_eq!(schema.data.as_ref(), s.data.as_ref(), "{}", ch.topic);
+            assert_eq!(ch.message_encoding, "protobuf", "{}", ch.topic);
+        };
+        match ch.topic.as_str() {
+            "/foxglove/scene" => {
+                sdk(SceneUpdate::get_schema().unwrap());
+                let s = SceneUpdate::decode(msg.data.as_ref()).unwrap();
+                let robots = s.entities.iter().filter(|e| e.id.starts_with("robot_"));
+                assert_eq!(robots.count(), 8);
+                assert!(s.entities.iter().any(|e| e.id == "pitch"));
+                assert!(s.entities.iter().any(|e| e.id == "ball"));
+                scenes += 1;
+            }
+            "/foxglove/tf" => {
+                sdk(FrameTransforms::get_schema().unwrap());
+                let t = FrameTransforms::decode(msg.data.as_ref()).unwrap();
+                assert_eq!(t.transforms.len(), 9);
+                // Stamped with game time, as the message is logged.
+                let stamp = t.transforms[0].timestamp.unwrap();
+                assert_eq!(stamp.total_nanos(), msg.log_time);
+                tfs += 1;
+            }
+            topic => {
+                assert_eq!(ch.message_encoding, "json", "{topic}");
+                assert_eq!(schema.encoding, "jsonschema", "{topic}");
+                serde_json::from_slice::<serde_json::Value>(&msg.data).unwrap();
+                json += 1;
+            }
+        }
+    }
+    assert_eq!((scenes, tfs), (1, 51));
+    assert!(json > 100);
+}
+
+/// Rewrites a recording message by message with `/match/meta`'s `format`
+/// set to `format`.
+fn with_format(bytes: &[u8], format: u32) -> Vec<u8> {
+    let mut out = mcap::Writer::new(Cursor::new(Vec::new())).unwrap();
+    let mut channels = std::collections::BTreeMap::new();
+    for msg in mcap::MessageStream::new(bytes).unwrap() {
+        let msg = msg.unwrap();
+        let ch = &msg.channel;
+        let id = *channels.entry(ch.id).or_insert_with(|| {
+            let s = ch.schema.as_ref().unwrap();
+            let schema = out.add_schema(&s.name, &s.encoding, &s.data).unwrap();
+            out.add_channel(schema, &ch.topic, &ch.message_encoding, &ch.metadata)
+                .unwrap()
+        });
+        let mut data = msg.data.to_vec();
+        if ch.topic == "/match/meta" {
+            let mut meta: MatchMeta = serde_json::from_slice(&data).unwrap();
+            meta.format = format;
+            data = serde_json::to_vec(&meta).unwrap();
+        }
+        let header = mcap::records::MessageHeader {
+            channel_id: id,
+            sequence: msg.sequence,
+            log_time: msg.log_time,
+            publish_time: msg.publish_time,
+        };
+        out.write_to_known_channel(&header, &data).unwrap();
+    }
+    out.finish().unwrap();
+    out.into_inner().into_inner()
+}
+
+/// Format 3 changed only the Foxglove channels: a format-2 recording still
+/// reads and replays; format 1 and formats newer than this build's are
+/// refused.
+#[test]
+fn format_2_still_replays_and_others_are_refused() {
+    assert_eq!(naosoccer_record::RECORDING_FORMAT, 3);
+    let cfg = short_config(10.0);
+    let (bytes, _) = record(&cfg, 4, RecorderOptions::default());
+    let rec = Recording::read(&with_format(&bytes, 2)).unwrap();
+    assert_eq!(rec.meta.format, 2);
+    assert_eq!(
+        replay(&rec).unwrap(),
+        ReplayOutcome::Identical {
+            ticks: 100,
+            truncated: false
+        }
+    );
+    for format in [1, 4] {
+        let err = Recording::read(&with_format(&bytes, format)).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!("recording format {format} is not supported (this build reads 2 to 3)")
+        );
+    }
+}
