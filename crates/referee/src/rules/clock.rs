@@ -6,7 +6,7 @@
 
 use naosoccer_proto::{Event, Team, Tick};
 
-use super::{Command, Outcome};
+use super::outcome::{Command, Outcome};
 
 #[derive(Debug, Clone, Copy)]
 pub struct Clock {

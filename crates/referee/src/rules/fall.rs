@@ -14,7 +14,7 @@
 use naosoccer_proto::{Event, RobotId, Tick, ROBOTS};
 use naosoccer_sim::Snapshot;
 
-use super::{Command, Outcome};
+use super::outcome::{Command, Outcome};
 
 #[derive(Debug, Clone)]
 pub struct FallRule {

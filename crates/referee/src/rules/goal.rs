@@ -5,7 +5,8 @@
 use naosoccer_proto::{Event, Team, Tick};
 use naosoccer_sim::Snapshot;
 
-use super::{last_touch, Command, Field, Outcome};
+use super::field::{last_touch, Field};
+use super::outcome::{Command, Outcome};
 
 #[derive(Debug, Clone, Copy)]
 pub struct GoalRule {

@@ -20,7 +20,9 @@
 use naosoccer_proto::{Event, RobotId, SetPlayKind, Team, Tick};
 use naosoccer_sim::Snapshot;
 
-use super::{last_touch, Command, Field, KickOff, Outcome};
+use super::field::{last_touch, Field};
+use super::kickoff::KickOff;
+use super::outcome::{Command, Outcome};
 
 /// A restart the rule awards.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -4,7 +4,7 @@
 
 use naosoccer_proto::{Event, RobotId, Tick};
 
-use super::Outcome;
+use super::outcome::Outcome;
 
 #[derive(Debug, Clone, Default)]
 pub struct PassRule {

@@ -5,7 +5,7 @@
 use naosoccer_proto::{RobotId, ROBOTS};
 use naosoccer_sim::Snapshot;
 
-use super::wrap_angle;
+use super::field::wrap_angle;
 
 #[derive(Debug, Clone, Copy)]
 pub struct PossessionRule {

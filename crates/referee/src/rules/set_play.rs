@@ -13,7 +13,7 @@
 use naosoccer_proto::{Event, RobotId, SetPlayKind, Team, Tick};
 use naosoccer_sim::Snapshot;
 
-use super::Outcome;
+use super::outcome::Outcome;
 
 /// The set play in progress.
 #[derive(Debug, Clone, Copy, PartialEq)]
