@@ -335,6 +335,70 @@ impl Mlp {
     }
 }
 
+/// One kernel of [`Linear::apply_avx2`] and [`Linear::apply_avx512`], written
+/// once for both vector widths: `fn NAME, lanes L: setzero, loadu, set1,
+/// fmadd, storeu` defines `NAME::<R, V>` with the intrinsics of that width.
+/// For `R` rows it computes the outputs from `j` on, `L * V` at a time (`R *
+/// V` accumulator vectors) while whole groups are left, and returns where it
+/// stopped. Each lane takes its inputs in order with one rounding per fused
+/// multiply-add and its bias last, so every width gives the same bits.
+///
+/// # Safety (of the defined function)
+/// The processor has the intrinsics' features; `x` holds `R` rows of
+/// `input` values `stride` apart and `y` holds `R * output` values.
+#[cfg(target_arch = "x86_64")]
+macro_rules! outputs_kernel {
+    (
+        $(#[$attr:meta])*
+        fn $name:ident, lanes $lanes:literal:
+            $setzero:ident, $loadu:ident, $set1:ident, $fmadd:ident, $storeu:ident
+    ) => {
+        $(#[$attr])*
+        unsafe fn $name<const R: usize, const V: usize>(
+            &self,
+            x: &[f32],
+            stride: usize,
+            y: &mut [f32],
+            mut j: usize,
+        ) -> usize {
+            use std::arch::x86_64::{$fmadd, $loadu, $set1, $setzero, $storeu};
+            const WIDE: usize = $lanes;
+            let (n_in, o, ws) = (self.input, self.output, padded(self.output));
+            let xs: [*const f32; R] = std::array::from_fn(|r| x[r * stride..].as_ptr());
+            let w = self.weight_t.as_ptr();
+            while j + V * WIDE <= ws {
+                let mut acc = [[$setzero(); V]; R];
+                for k in 0..n_in {
+                    // SAFETY: row k of the padded weights holds `ws` values
+                    // and j + WIDE * V <= ws; the rows hold `input` > k
+                    // values.
+                    let wk = w.add(k * ws + j);
+                    let wv: [_; V] = std::array::from_fn(|v| $loadu(wk.add(v * WIDE)));
+                    for (acc, xr) in acc.iter_mut().zip(&xs) {
+                        let xk = $set1(*xr.add(k));
+                        for (a, &wv) in acc.iter_mut().zip(&wv) {
+                            *a = $fmadd(wv, xk, *a);
+                        }
+                    }
+                }
+                let n = (V * WIDE).min(o - j);
+                for (r, acc) in acc.iter().enumerate() {
+                    let mut v = [[0.0f32; WIDE]; V];
+                    for (v, a) in v.iter_mut().zip(acc) {
+                        $storeu(v.as_mut_ptr(), *a);
+                    }
+                    let y = &mut y[r * o + j..r * o + j + n];
+                    for ((yc, a), b) in y.iter_mut().zip(v.as_flattened()).zip(&self.bias[j..]) {
+                        *yc = a + b;
+                    }
+                }
+                j += V * WIDE;
+            }
+            j
+        }
+    };
+}
+
 /// Rows a forward pass takes through the layers together.
 pub const BLOCK: usize = 4;
 
@@ -452,9 +516,9 @@ impl Linear {
     unsafe fn apply_avx512<const R: usize>(&self, x: &[f32], stride: usize, y: &mut [f32]) {
         let ws = padded(self.output);
         let mut j = match R {
-            1 => self.outputs_avx512::<R, 16>(x, stride, y),
-            2 => self.outputs_avx512::<R, 8>(x, stride, y),
-            _ => self.outputs_avx512::<R, 4>(x, stride, y),
+            1 => self.outputs_avx512::<R, 16>(x, stride, y, 0),
+            2 => self.outputs_avx512::<R, 8>(x, stride, y, 0),
+            _ => self.outputs_avx512::<R, 4>(x, stride, y, 0),
         };
         if j + 2 * LANES <= ws {
             j = self.outputs_avx2::<R, 2>(x, stride, y, j);
@@ -464,101 +528,24 @@ impl Linear {
         }
     }
 
-    /// Outputs from 0 on, `16 * V` at a time while whole groups are left;
-    /// returns where it stopped.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx2,fma")]
-    #[inline]
-    unsafe fn outputs_avx512<const R: usize, const V: usize>(
-        &self,
-        x: &[f32],
-        stride: usize,
-        y: &mut [f32],
-    ) -> usize {
-        use std::arch::x86_64::{
-            _mm512_fmadd_ps, _mm512_loadu_ps, _mm512_set1_ps, _mm512_setzero_ps, _mm512_storeu_ps,
-        };
-        const WIDE: usize = 2 * LANES;
-        let (n_in, o, ws) = (self.input, self.output, padded(self.output));
-        let xs: [*const f32; R] = std::array::from_fn(|r| x[r * stride..].as_ptr());
-        let w = self.weight_t.as_ptr();
-        let mut j = 0;
-        while j + V * WIDE <= ws {
-            let mut acc = [[_mm512_setzero_ps(); V]; R];
-            for k in 0..n_in {
-                // SAFETY: row k of the padded weights holds `ws` values and
-                // j + 16 V <= ws; the rows hold `input` > k values.
-                let wk = w.add(k * ws + j);
-                let wv: [_; V] = std::array::from_fn(|v| _mm512_loadu_ps(wk.add(v * WIDE)));
-                for (acc, xr) in acc.iter_mut().zip(&xs) {
-                    let xk = _mm512_set1_ps(*xr.add(k));
-                    for (a, &wv) in acc.iter_mut().zip(&wv) {
-                        *a = _mm512_fmadd_ps(wv, xk, *a);
-                    }
-                }
-            }
-            let n = (V * WIDE).min(o - j);
-            for (r, acc) in acc.iter().enumerate() {
-                let mut v = [[0.0f32; WIDE]; V];
-                for (v, a) in v.iter_mut().zip(acc) {
-                    _mm512_storeu_ps(v.as_mut_ptr(), *a);
-                }
-                let y = &mut y[r * o + j..r * o + j + n];
-                for ((yc, a), b) in y.iter_mut().zip(v.as_flattened()).zip(&self.bias[j..]) {
-                    *yc = a + b;
-                }
-            }
-            j += V * WIDE;
-        }
-        j
+    outputs_kernel! {
+        /// Outputs from `j` on, `16 * V` at a time while whole groups are
+        /// left; returns where it stopped.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f,avx2,fma")]
+        #[inline]
+        fn outputs_avx512, lanes 16:
+            _mm512_setzero_ps, _mm512_loadu_ps, _mm512_set1_ps, _mm512_fmadd_ps, _mm512_storeu_ps
     }
 
-    /// Outputs from `j` on, `8 * V` at a time while whole groups are left;
-    /// returns where it stopped.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    #[inline]
-    unsafe fn outputs_avx2<const R: usize, const V: usize>(
-        &self,
-        x: &[f32],
-        stride: usize,
-        y: &mut [f32],
-        mut j: usize,
-    ) -> usize {
-        use std::arch::x86_64::{
-            _mm256_fmadd_ps, _mm256_loadu_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps,
-        };
-        let (n_in, o, ws) = (self.input, self.output, padded(self.output));
-        let xs: [*const f32; R] = std::array::from_fn(|r| x[r * stride..].as_ptr());
-        let w = self.weight_t.as_ptr();
-        while j + V * LANES <= ws {
-            let mut acc = [[_mm256_setzero_ps(); V]; R];
-            for k in 0..n_in {
-                // SAFETY: row k of the padded weights holds `ws` values and
-                // j + 8 V <= ws; the rows hold `input` > k values.
-                let wk = w.add(k * ws + j);
-                let wv: [_; V] = std::array::from_fn(|v| _mm256_loadu_ps(wk.add(v * LANES)));
-                for (acc, xr) in acc.iter_mut().zip(&xs) {
-                    let xk = _mm256_set1_ps(*xr.add(k));
-                    for (a, &wv) in acc.iter_mut().zip(&wv) {
-                        *a = _mm256_fmadd_ps(wv, xk, *a);
-                    }
-                }
-            }
-            let n = (V * LANES).min(o - j);
-            for (r, acc) in acc.iter().enumerate() {
-                let mut v = [[0.0f32; LANES]; V];
-                for (v, a) in v.iter_mut().zip(acc) {
-                    _mm256_storeu_ps(v.as_mut_ptr(), *a);
-                }
-                let y = &mut y[r * o + j..r * o + j + n];
-                for ((yc, a), b) in y.iter_mut().zip(v.as_flattened()).zip(&self.bias[j..]) {
-                    *yc = a + b;
-                }
-            }
-            j += V * LANES;
-        }
-        j
+    outputs_kernel! {
+        /// Outputs from `j` on, `8 * V` at a time while whole groups are
+        /// left; returns where it stopped.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2,fma")]
+        #[inline]
+        fn outputs_avx2, lanes 8:
+            _mm256_setzero_ps, _mm256_loadu_ps, _mm256_set1_ps, _mm256_fmadd_ps, _mm256_storeu_ps
     }
 }
 
