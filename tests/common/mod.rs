@@ -1,7 +1,7 @@
-//! Helpers shared by the integration tests (`mod common;` in each): running
-//! the real binary, scratch files, and (in [`server`]) a real server on
-//! 127.0.0.1:0 with the in-process reference match. Not every test binary
-//! uses every helper.
+//! Helpers shared by the integration tests (the `integration` binary and
+//! `server_logs.rs` each declare `mod common;`): running the real binary,
+//! scratch files, and (in [`server`]) a real server on 127.0.0.1:0 with the
+//! in-process reference match. Not every test uses every helper.
 #![allow(dead_code)]
 
 pub mod server;

@@ -7,7 +7,7 @@ use naosoccer_proto::frame;
 use naosoccer_proto::msg::{ClientMsg, ServerMsg};
 use serde_json::Value;
 
-const DOC: &str = include_str!("../docs/PROTOCOL.md");
+const DOC: &str = include_str!("../../docs/PROTOCOL.md");
 
 const CLIENT_TYPES: &[&str] = &[
     "hello",

@@ -1,7 +1,7 @@
 //! `naosoccer match --record`, `replay` and `render` as a user runs them:
 //! the real binary, real files.
 
-mod common;
+use crate::common;
 
 use common::{naosoccer, scratch, text};
 

@@ -3,7 +3,7 @@
 //! the scripted team plays red, and the match equals the same match played
 //! in process with the same networks, bit for bit.
 
-mod common;
+use crate::common;
 
 use std::path::PathBuf;
 use std::process::Command;

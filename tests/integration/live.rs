@@ -12,7 +12,7 @@ use std::time::Duration;
 use naosoccer::live::viewer::{scene_contents, SceneContents, Viewer};
 use serde_json::Value;
 
-mod common;
+use crate::common;
 
 use common::naosoccer_cmd as naosoccer;
 

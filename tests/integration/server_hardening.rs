@@ -4,7 +4,7 @@
 //! match ends alone. All on 127.0.0.1; waits are on events or tokio's paused
 //! clock, never on sleeps.
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use naosoccer_client::{Client, ClientError, Push};

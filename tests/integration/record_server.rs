@@ -1,7 +1,7 @@
 //! A match played through the server in lockstep is recorded to MCAP and
 //! the recording replays identically, with the statistics the clients saw.
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use naosoccer_client::robot::{run_team, TeamRun};

@@ -1,7 +1,7 @@
 //! `naosoccer render FILE --gif OUT.gif` as a user runs it: a real match
 //! recorded to MCAP, drawn as a GIF, decoded back frame by frame.
 
-mod common;
+use crate::common;
 
 use common::{naosoccer, scratch, text};
 

@@ -1,6 +1,6 @@
 //! `naosoccer match` end to end: the real binary, its JSON and its table.
 
-mod common;
+use crate::common;
 
 use common::naosoccer;
 

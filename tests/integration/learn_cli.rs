@@ -4,7 +4,7 @@
 //! trained teams in matches (in every build); and, in a build without
 //! training, what `train` says to run.
 
-mod common;
+use crate::common;
 
 use common::naosoccer;
 

@@ -1,7 +1,7 @@
 //! Misbehaving clients get the documented error, and the server keeps
 //! serving everyone else.
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use naosoccer_client::{Client, ClientError};

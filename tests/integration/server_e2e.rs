@@ -1,7 +1,7 @@
 //! End to end over TCP: a real server on an ephemeral port, real clients,
 //! real matches; results compared with the same match played in process.
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use naosoccer_client::robot::{run_team, TeamRun};
@@ -347,7 +347,7 @@ async fn realtime_match_runs_on_the_clock() {
 /// library only) against a real server, plays a whole match.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn documented_python_client_plays_a_match() {
-    let doc = include_str!("../docs/PROTOCOL.md");
+    let doc = include_str!("../../docs/PROTOCOL.md");
     let at = doc.find("```python\n").expect("python block") + "```python\n".len();
     let script = &doc[at..at + doc[at..].find("```").unwrap()];
     let mut cfg = config(30);

@@ -5,7 +5,7 @@
 //! framing by hand and reads messages into its own 1.1 types, so nothing of
 //! this build's protocol crate helps it along.
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use naosoccer_client::PolicyKind;

@@ -3,7 +3,7 @@
 //! the connection, never panics; a lockstep match on another connection
 //! keeps ticking throughout (issue 6).
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use naosoccer_client::{Client, Push};

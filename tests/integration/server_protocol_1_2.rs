@@ -2,7 +2,7 @@
 //! port (issue 15 B): the referee's events pushed with every observation,
 //! the pitch announced in `joined`, `end_match`.
 
-mod common;
+use crate::common;
 
 use common::server::*;
 use naosoccer_client::{Client, ClientError, PolicyKind, Push};
