@@ -672,8 +672,10 @@ fn drill_success(cfg: &TrainConfig, spec: &str, seed: u64, episodes: usize) -> f
 /// half, the robot within 0.6 m behind it (45 degrees either side of
 /// straight behind) roughly facing it; it must walk up, line up and shoot,
 /// in 30 seconds. At least 90% of fresh episodes end in a goal. Trained on
-/// the reward of `assets/train-team.toml` for 1.2M transitions (about 3
-/// minutes here): 0.92 of 200 fresh episodes, 0.44 untrained.
+/// the reward of `assets/train-team.toml` for 2.4M transitions (about 5
+/// minutes here): 0.95 of 200 fresh episodes, 0.45 untrained. 1.2M gave
+/// 0.92 on earlier machines and 0.895 on a later one (libtorch's kernels
+/// may differ between processors): too thin a margin.
 #[test]
 fn team_ppo_learns_to_score_on_an_empty_goal() {
     use naosoccer_learn::env::Drill;
@@ -713,7 +715,7 @@ fn team_ppo_learns_to_score_on_an_empty_goal() {
     assert!(untrained < 0.5, "the drill is not trivial ({untrained:.2})");
 }
 
-const DRILL_STEPS: u64 = 1_200_000;
+const DRILL_STEPS: u64 = 2_400_000;
 
 /// `dqn-epsilon:` on the decision-level MDP: the random branch draws among
 /// the actions allowed, so it never picks a masked `shoot` (ball out of
