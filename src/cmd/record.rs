@@ -286,104 +286,103 @@ fn render_png(rec: &Recording, out: &Path, width: u32) -> anyhow::Result<()> {
     // Drawn into memory and written with the `png` crate: plotters' own file
     // output would pull in the whole `image` crate for this one PNG.
     let mut pixels = vec![0u8; width as usize * height as usize * 3];
-    {
-        let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
-        root.fill(&RGBColor(28, 110, 40))?;
-        let mut chart = ChartBuilder::on(&root).build_cartesian_2d(x0..x1, y0..y1)?;
-        let white = ShapeStyle::from(&WHITE).stroke_width(3);
-        let (hl, hw) = (hl as f64, hw as f64);
+    let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
+    root.fill(&RGBColor(28, 110, 40))?;
+    let mut chart = ChartBuilder::on(&root).build_cartesian_2d(x0..x1, y0..y1)?;
+    let white = ShapeStyle::from(&WHITE).stroke_width(3);
+    let (hl, hw) = (hl as f64, hw as f64);
+    chart.draw_series(std::iter::once(PathElement::new(
+        vec![(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw), (-hl, -hw)],
+        white,
+    )))?;
+    chart.draw_series(std::iter::once(PathElement::new(
+        vec![(0.0, -hw), (0.0, hw)],
+        white,
+    )))?;
+    chart.draw_series(std::iter::once(PathElement::new(
+        (0..=64)
+            .map(|i| {
+                let a = i as f64 / 64.0 * std::f64::consts::TAU;
+                (0.75 * a.cos(), 0.75 * a.sin())
+            })
+            .collect::<Vec<_>>(),
+        white,
+    )))?;
+    let gw = (sim.goal_width / 2.0) as f64;
+    let depth = sim.goal_depth as f64;
+    for side in [-1.0, 1.0] {
         chart.draw_series(std::iter::once(PathElement::new(
-            vec![(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw), (-hl, -hw)],
-            white,
+            vec![
+                (side * hl, -gw),
+                (side * (hl + depth), -gw),
+                (side * (hl + depth), gw),
+                (side * hl, gw),
+            ],
+            ShapeStyle::from(&RGBColor(230, 230, 230)).stroke_width(4),
         )))?;
-        chart.draw_series(std::iter::once(PathElement::new(
-            vec![(0.0, -hw), (0.0, hw)],
-            white,
-        )))?;
-        chart.draw_series(std::iter::once(PathElement::new(
-            (0..=64)
-                .map(|i| {
-                    let a = i as f64 / 64.0 * std::f64::consts::TAU;
-                    (0.75 * a.cos(), 0.75 * a.sin())
-                })
-                .collect::<Vec<_>>(),
-            white,
-        )))?;
-        let gw = (sim.goal_width / 2.0) as f64;
-        let depth = sim.goal_depth as f64;
-        for side in [-1.0, 1.0] {
-            chart.draw_series(std::iter::once(PathElement::new(
-                vec![
-                    (side * hl, -gw),
-                    (side * (hl + depth), -gw),
-                    (side * (hl + depth), gw),
-                    (side * hl, gw),
-                ],
-                ShapeStyle::from(&RGBColor(230, 230, 230)).stroke_width(4),
-            )))?;
-        }
+    }
 
-        let shades = |team: Team, player: usize| -> RGBColor {
-            let k = 40 * player as u8;
-            match team {
-                Team::Blue => RGBColor(40 + k, 90 + k, 255),
-                Team::Red => RGBColor(255, 50 + k, 40 + k),
-            }
-        };
-        for r in 0..ROBOTS {
-            let team = if r < ROBOTS / 2 {
-                Team::Blue
-            } else {
-                Team::Red
-            };
-            let color = shades(team, r % (ROBOTS / 2));
-            let path: Vec<(f64, f64)> = rec
-                .states
-                .iter()
-                .map(|s| (s.robots[r].x as f64, s.robots[r].y as f64))
-                .collect();
-            chart.draw_series(split_at_jumps(&path).map(|seg| {
-                PathElement::new(
-                    seg.to_vec(),
-                    ShapeStyle::from(&color.mix(0.55)).stroke_width(2),
-                )
-            }))?;
-            if let Some(&(x, y)) = path.last() {
-                chart.draw_series(std::iter::once(Circle::new((x, y), 9, color.filled())))?;
-            }
+    let shades = |team: Team, player: usize| -> RGBColor {
+        let k = 40 * player as u8;
+        match team {
+            Team::Blue => RGBColor(40 + k, 90 + k, 255),
+            Team::Red => RGBColor(255, 50 + k, 40 + k),
         }
-        let ball: Vec<(f64, f64)> = rec
+    };
+    for r in 0..ROBOTS {
+        let team = if r < ROBOTS / 2 {
+            Team::Blue
+        } else {
+            Team::Red
+        };
+        let color = shades(team, r % (ROBOTS / 2));
+        let path: Vec<(f64, f64)> = rec
             .states
             .iter()
-            .map(|s| (s.ball.x as f64, s.ball.y as f64))
+            .map(|s| (s.robots[r].x as f64, s.robots[r].y as f64))
             .collect();
-        chart.draw_series(split_at_jumps(&ball).map(|seg| {
+        chart.draw_series(split_at_jumps(&path).map(|seg| {
             PathElement::new(
                 seg.to_vec(),
-                ShapeStyle::from(&RGBColor(255, 150, 0)).stroke_width(2),
+                ShapeStyle::from(&color.mix(0.55)).stroke_width(2),
             )
         }))?;
-        // Goals: where the ball crossed, as a ring in the scoring team's colour.
-        for e in &rec.events {
-            if let Event::Goal { tick, team, .. } = e {
-                let at = rec
-                    .states
-                    .iter()
-                    .rev()
-                    .find(|s| s.tick < *tick)
-                    .map(|s| (s.ball.x as f64, s.ball.y as f64));
-                if let Some(p) = at {
-                    chart.draw_series(std::iter::once(Circle::new(
-                        p,
-                        16,
-                        ShapeStyle::from(&shades(*team, 0)).stroke_width(5),
-                    )))?;
-                    chart.draw_series(std::iter::once(Circle::new(p, 6, YELLOW.filled())))?;
-                }
+        if let Some(&(x, y)) = path.last() {
+            chart.draw_series(std::iter::once(Circle::new((x, y), 9, color.filled())))?;
+        }
+    }
+    let ball: Vec<(f64, f64)> = rec
+        .states
+        .iter()
+        .map(|s| (s.ball.x as f64, s.ball.y as f64))
+        .collect();
+    chart.draw_series(split_at_jumps(&ball).map(|seg| {
+        PathElement::new(
+            seg.to_vec(),
+            ShapeStyle::from(&RGBColor(255, 150, 0)).stroke_width(2),
+        )
+    }))?;
+    // Goals: where the ball crossed, as a ring in the scoring team's colour.
+    for e in &rec.events {
+        if let Event::Goal { tick, team, .. } = e {
+            let at = rec
+                .states
+                .iter()
+                .rev()
+                .find(|s| s.tick < *tick)
+                .map(|s| (s.ball.x as f64, s.ball.y as f64));
+            if let Some(p) = at {
+                chart.draw_series(std::iter::once(Circle::new(
+                    p,
+                    16,
+                    ShapeStyle::from(&shades(*team, 0)).stroke_width(5),
+                )))?;
+                chart.draw_series(std::iter::once(Circle::new(p, 6, YELLOW.filled())))?;
             }
         }
-        root.present()?;
     }
+    root.present()?;
+    drop((chart, root));
     write_png(out, width, height, &pixels).with_context(|| format!("writing {}", out.display()))?;
     println!(
         "wrote {} ({} ticks, {} goals)",
