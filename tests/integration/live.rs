@@ -86,10 +86,12 @@ async fn match_live_streams_the_scene_and_changes_nothing() {
     assert_eq!(ch["/match/1/tf"]["schemaName"], "foxglove.FrameTransforms");
     assert_eq!(ch["/match/1/tf"]["encoding"], "protobuf");
     assert_eq!(ch["/match/1/state"]["encoding"], "json");
+    // The scene last: its subscription releases kick-off (--wait-viewer),
+    // and the SDK takes a request's subscriptions in order.
     ws.subscribe(&[
-        (1, scene),
         (2, &ch["/match/1/state"]),
         (3, &ch["/match/1/tf"]),
+        (1, scene),
     ])
     .await
     .unwrap();
@@ -187,11 +189,12 @@ async fn replay_live_streams_every_tick_in_order() {
     let (mut ws, ch) = watch(&addr).await;
     assert_eq!(ch["/match/1/log"]["schemaName"], "foxglove.Log");
     assert_eq!(ch["/match/1/log"]["encoding"], "protobuf");
+    // The scene last: its subscription releases the first tick.
     ws.subscribe(&[
-        (1, &ch["/match/1/scene"]),
         (2, &ch["/match/1/state"]),
         (3, &ch["/match/1/events"]),
         (4, &ch["/match/1/log"]),
+        (1, &ch["/match/1/scene"]),
     ])
     .await
     .unwrap();
