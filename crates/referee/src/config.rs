@@ -173,6 +173,16 @@ pub struct RewardConfig {
     /// tapping the ball between neighbours.
     pub pass: f32,
     pub pass_min_distance: f32,
+    /// Ours: added (outside the log) to a robot whose kick sends the ball
+    /// at a standing teammate ahead: one within `aim_angle` radians of the
+    /// ball's new direction, between `pass_min_distance` and `aim_range`
+    /// metres from the ball and nearer the opponent goal than the ball. It
+    /// pays the aim, not the outcome (the pass bonus pays that), so that a
+    /// robot with the ball learns to turn toward a receiver before it
+    /// kicks; 0 (off) by default.
+    pub aim: f32,
+    pub aim_angle: f32,
+    pub aim_range: f32,
 }
 
 impl Default for RewardConfig {
@@ -192,6 +202,9 @@ impl Default for RewardConfig {
             shaping_gamma: 1.0,
             pass: 0.0,
             pass_min_distance: 1.0,
+            aim: 0.0,
+            aim_angle: 0.26,
+            aim_range: 4.0,
         }
     }
 }
@@ -337,6 +350,9 @@ impl MatchConfig {
             ("reward.support_side", w.support_side),
             ("reward.pass", w.pass),
             ("reward.pass_min_distance", w.pass_min_distance),
+            ("reward.aim", w.aim),
+            ("reward.aim_angle", w.aim_angle),
+            ("reward.aim_range", w.aim_range),
         ] {
             non_negative(field, v)?;
         }

@@ -177,6 +177,7 @@ impl Match {
             self.sim.set_command(i, cmd);
         }
         let potential_before = self.potentials();
+        let mut aimed = [false; ROBOTS];
         for _ in 0..self.steps_per_tick {
             self.sim.step();
             after_physics(&self.sim);
@@ -191,6 +192,10 @@ impl Match {
                         speed: k.speed,
                     });
                     self.pass.kick(robot, ball);
+                    if self.cfg.reward.aim > 0.0 {
+                        aimed[k.robot] |=
+                            aims_at_teammate(&self.cfg.reward, snap, &self.fall.down(), robot);
+                    }
                 }
             }
         }
@@ -208,6 +213,11 @@ impl Match {
             .zip(potential_after)
         {
             *s = gamma * after - before;
+        }
+        for (s, aimed) in self.shaping.iter_mut().zip(aimed) {
+            if aimed {
+                *s += self.cfg.reward.aim;
+            }
         }
         self.run_rules(tick);
         self.apply_commands(tick);
@@ -532,7 +542,7 @@ impl Match {
     /// `s = r_goal + r_close + r_control - r_opponent_control`, returned as
     /// `sign(s) * ln(1 + |s|)` (DESIGN.md explains why not the paper's
     /// `-log(s)`), plus the shaping terms outside the log: potential-based
-    /// progress and approach, and the pass bonus (`RewardConfig`). All 0
+    /// progress and approach, and the pass and aim bonuses (`RewardConfig`). All 0
     /// before the first tick.
     pub fn rewards(&self, team: Team) -> [f32; PLAYERS_PER_TEAM] {
         let shared = self.shared_reward(team);
@@ -594,6 +604,39 @@ fn pass_bonus(w: &RewardConfig, shaping: &mut [f32; ROBOTS], p: PassMade) {
         shaping[p.from.index()] += w.pass;
         shaping[p.to.index()] += w.pass;
     }
+}
+
+/// Whether `kicker`'s kick, just made, sends the ball at a standing
+/// teammate ahead (`RewardConfig::aim`).
+fn aims_at_teammate(
+    w: &RewardConfig,
+    snap: &naosoccer_sim::Snapshot,
+    down: &[bool; ROBOTS],
+    kicker: RobotId,
+) -> bool {
+    let [bx, by, _] = snap.ball.pos;
+    let [vx, vy, _] = snap.ball.vel;
+    let speed = vx.hypot(vy);
+    if speed <= 0.0 {
+        return false;
+    }
+    let team = kicker.team();
+    let cos_max = w.aim_angle.cos();
+    (0..PLAYERS_PER_TEAM).any(|p| {
+        let Some(mate) = RobotId::new(team, p) else {
+            return false;
+        };
+        if mate == kicker || down[mate.index()] {
+            return false;
+        }
+        let r = &snap.robots[mate.index()].pos;
+        let (dx, dy) = (r[0] - bx, r[1] - by);
+        let d = dx.hypot(dy);
+        d >= w.pass_min_distance
+            && d <= w.aim_range
+            && dx * team.direction() > 0.0
+            && (dx * vx + dy * vy) >= cos_max * d * speed
+    })
 }
 
 /// `sign(s) * ln(1 + |s|)`: keeps the sign, compresses the size.

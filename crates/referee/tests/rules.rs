@@ -928,3 +928,54 @@ fn scripted_defaults_agree_with_the_default_match() {
     assert!(sim.kick_reach_min <= d.reach_min && d.reach_max <= sim.kick_reach_max);
     assert!(d.reach_half_width <= sim.kick_half_width);
 }
+
+/// `reward.aim`: the tick of a kick pays `aim` to the kicker when the ball
+/// goes at a standing teammate ahead (within `aim_angle` of its direction,
+/// `pass_min_distance` to `aim_range` away), and nothing when the teammate
+/// stands off the line or behind the ball; nobody else is paid.
+#[test]
+fn aim_bonus_pays_a_kick_at_a_teammate_ahead_only() {
+    let kick_reward_within = |mate: (f32, f32), range: f32| {
+        let mut cfg = MatchConfig::default();
+        shaping_only(&mut cfg);
+        cfg.reward.aim = 1.5;
+        cfg.reward.aim_range = range;
+        let mut m = Match::new(&cfg, 8).unwrap();
+        clear_the_pitch(&mut m);
+        let (a, b) = (robot(Team::Blue, 1), robot(Team::Blue, 2));
+        m.sim_mut().place_robot(a.index(), -1.0, 0.0, 0.0);
+        m.sim_mut().place_robot(b.index(), mate.0, mate.1, PI);
+        m.sim_mut().place_ball(-0.82, 0.0);
+        m.step(&STAY);
+        let mut kick = STAY;
+        kick[a.index()] = Action::Shoot;
+        let events = run_until(&mut m, &kick, 10, |_, ev| {
+            ev.iter().any(|e| matches!(e, Event::Kick { .. }))
+        });
+        assert!(
+            events
+                .iter()
+                .any(|e| matches!(e, Event::Kick { robot, .. } if *robot == a)),
+            "{events:?}"
+        );
+        let blue = m.rewards(Team::Blue);
+        let others: f32 = (0..4).filter(|&p| p != 1).map(|p| blue[p].abs()).sum();
+        assert_eq!(others, 0.0, "{blue:?}");
+        assert_eq!(m.rewards(Team::Red), [0.0; 4]);
+        blue[1]
+    };
+    let kick_reward = |mate| kick_reward_within(mate, 4.0);
+    assert_eq!(
+        kick_reward((1.2, 0.0)),
+        1.5,
+        "a teammate 2 m ahead on the line"
+    );
+    assert_eq!(kick_reward((1.2, 0.3)), 1.5, "8 degrees off the line");
+    assert_eq!(kick_reward((0.0, 1.6)), 0.0, "63 degrees off the line");
+    assert_eq!(
+        kick_reward((-0.4, 0.0)),
+        0.0,
+        "closer than pass_min_distance"
+    );
+    assert_eq!(kick_reward_within((1.2, 0.0), 1.5), 0.0, "beyond aim_range");
+}
