@@ -183,6 +183,11 @@ pub struct RewardConfig {
     pub aim: f32,
     pub aim_angle: f32,
     pub aim_range: f32,
+    /// Above 0, `aim` pays only a kick whose lane is clear: no opponent,
+    /// standing or lying, within `aim_lane` metres of the straight line from
+    /// the ball to the receiver. A kick at a teammate behind an opponent is
+    /// a ball handed over. 0 (no lane check) by default.
+    pub aim_lane: f32,
 }
 
 impl Default for RewardConfig {
@@ -205,6 +210,7 @@ impl Default for RewardConfig {
             aim: 0.0,
             aim_angle: 0.26,
             aim_range: 4.0,
+            aim_lane: 0.0,
         }
     }
 }
@@ -353,6 +359,7 @@ impl MatchConfig {
             ("reward.aim", w.aim),
             ("reward.aim_angle", w.aim_angle),
             ("reward.aim_range", w.aim_range),
+            ("reward.aim_lane", w.aim_lane),
         ] {
             non_negative(field, v)?;
         }

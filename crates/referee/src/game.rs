@@ -636,6 +636,33 @@ fn aims_at_teammate(
             && d <= w.aim_range
             && dx * team.direction() > 0.0
             && (dx * vx + dy * vy) >= cos_max * d * speed
+            && (w.aim_lane <= 0.0 || lane_clear(snap, team, [bx, by], [r[0], r[1]], w.aim_lane))
+    })
+}
+
+/// Whether no robot of the other team stands or lies within `width` metres
+/// of the segment from `from` to `to` (world frame).
+fn lane_clear(
+    snap: &naosoccer_sim::Snapshot,
+    team: naosoccer_proto::Team,
+    from: [f32; 2],
+    to: [f32; 2],
+    width: f32,
+) -> bool {
+    let (sx, sy) = (to[0] - from[0], to[1] - from[1]);
+    let len2 = sx * sx + sy * sy;
+    (0..PLAYERS_PER_TEAM).all(|p| {
+        let Some(o) = RobotId::new(team.other(), p) else {
+            return true;
+        };
+        let q = &snap.robots[o.index()].pos;
+        let (qx, qy) = (q[0] - from[0], q[1] - from[1]);
+        let t = if len2 > 0.0 {
+            ((qx * sx + qy * sy) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (qx - t * sx).hypot(qy - t * sy) > width
     })
 }
 

@@ -932,19 +932,25 @@ fn scripted_defaults_agree_with_the_default_match() {
 /// `reward.aim`: the tick of a kick pays `aim` to the kicker when the ball
 /// goes at a standing teammate ahead (within `aim_angle` of its direction,
 /// `pass_min_distance` to `aim_range` away), and nothing when the teammate
-/// stands off the line or behind the ball; nobody else is paid.
+/// stands off the line or behind the ball; nobody else is paid. With
+/// `aim_lane` set, an opponent near the line voids it.
 #[test]
 fn aim_bonus_pays_a_kick_at_a_teammate_ahead_only() {
-    let kick_reward_within = |mate: (f32, f32), range: f32| {
+    let kick_reward_at = |mate: (f32, f32), range: f32, lane: f32, opponent: Option<(f32, f32)>| {
         let mut cfg = MatchConfig::default();
         shaping_only(&mut cfg);
         cfg.reward.aim = 1.5;
         cfg.reward.aim_range = range;
+        cfg.reward.aim_lane = lane;
         let mut m = Match::new(&cfg, 8).unwrap();
         clear_the_pitch(&mut m);
         let (a, b) = (robot(Team::Blue, 1), robot(Team::Blue, 2));
         m.sim_mut().place_robot(a.index(), -1.0, 0.0, 0.0);
         m.sim_mut().place_robot(b.index(), mate.0, mate.1, PI);
+        if let Some((x, y)) = opponent {
+            m.sim_mut()
+                .place_robot(robot(Team::Red, 3).index(), x, y, PI);
+        }
         m.sim_mut().place_ball(-0.82, 0.0);
         m.step(&STAY);
         let mut kick = STAY;
@@ -964,6 +970,7 @@ fn aim_bonus_pays_a_kick_at_a_teammate_ahead_only() {
         assert_eq!(m.rewards(Team::Red), [0.0; 4]);
         blue[1]
     };
+    let kick_reward_within = |mate, range| kick_reward_at(mate, range, 0.0, None);
     let kick_reward = |mate| kick_reward_within(mate, 4.0);
     assert_eq!(
         kick_reward((1.2, 0.0)),
@@ -978,4 +985,23 @@ fn aim_bonus_pays_a_kick_at_a_teammate_ahead_only() {
         "closer than pass_min_distance"
     );
     assert_eq!(kick_reward_within((1.2, 0.0), 1.5), 0.0, "beyond aim_range");
+    // The lane check: an opponent 0.3 m off the line voids the aim only
+    // when the check is on; one 0.8 m off, or beyond the receiver, does not.
+    let near = Some((0.2, 0.3));
+    assert_eq!(kick_reward_at((1.2, 0.0), 4.0, 0.0, near), 1.5, "no check");
+    assert_eq!(
+        kick_reward_at((1.2, 0.0), 4.0, 0.5, near),
+        0.0,
+        "lane blocked"
+    );
+    assert_eq!(
+        kick_reward_at((1.2, 0.0), 4.0, 0.5, Some((0.2, 0.8))),
+        1.5,
+        "opponent wide of the lane"
+    );
+    assert_eq!(
+        kick_reward_at((1.2, 0.0), 4.0, 0.5, Some((2.0, 0.0))),
+        1.5,
+        "opponent beyond the receiver"
+    );
 }
