@@ -10,10 +10,17 @@ use naosoccer_client::policy::{Policy, PolicyKind};
 use naosoccer_learn::obs::ball_in_robot_frame;
 use naosoccer_learn::policy::is_free;
 use naosoccer_learn::LearnedPolicy;
-use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 
 const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
+const OUTCOMES: [&str; 5] = [
+    "a pass",
+    "the kicker's control",
+    "an opponent's control",
+    "a goal",
+    "the ball out",
+];
 const KINDS: [&str; 7] = [
     "ball in kick reach, facing the opponent half",
     "ball in kick reach, facing the own half",
@@ -121,6 +128,11 @@ fn main() {
     // Ball in kick reach with a teammate open where the kick would go.
     let mut pass_counts = [0u64; NAMES.len()];
     let (mut reach_ticks, mut cone_ticks) = (0u64, [0u64; 3]);
+    // What became of blue's kicks: the first of a pass, the kicker's own
+    // control again, an opponent's control, a goal, the ball out.
+    let mut kick_outcomes = [0u64; OUTCOMES.len()];
+    // The pending kick: the kicker, and whether it went forward.
+    let mut pending: Option<RobotId> = None;
     for seed in 0..matches {
         let mut m = Match::new(&cfg, 1_000_000 + seed).expect("a match");
         team.set_match_seed(m.seed());
@@ -154,10 +166,47 @@ fn main() {
                 let o = m.observe(Team::Red, i);
                 acts[PLAYERS_PER_TEAM + i] = red.act(&o);
             }
-            m.step(&acts);
+            let events = m.step(&acts).to_vec();
+            let mut settled = None;
+            for e in &events {
+                match *e {
+                    Event::Pass { from, .. } if Some(from) == pending => settled = Some(0),
+                    Event::Goal { .. } if pending.is_some() => settled = Some(3),
+                    Event::BallOut { .. } if pending.is_some() => settled = Some(4),
+                    _ => {}
+                }
+            }
+            if settled.is_none() && pending.is_some() {
+                if let Some(c) = m.controller() {
+                    settled = Some(if Some(c) == pending {
+                        1
+                    } else if c.team() == Team::Blue {
+                        0
+                    } else {
+                        2
+                    });
+                }
+            }
+            if let Some(k) = settled {
+                kick_outcomes[k] += 1;
+                pending = None;
+            }
+            for e in &events {
+                if let Event::Kick { robot, .. } = *e {
+                    pending = (robot.team() == Team::Blue).then_some(robot);
+                }
+            }
         }
+        pending = None;
     }
     println!("{spec} as blue against {opponent}, {matches} matches: actions taken by free robots");
+    let kicks: u64 = kick_outcomes.iter().sum();
+    let outcomes: Vec<String> = kick_outcomes
+        .iter()
+        .zip(OUTCOMES)
+        .map(|(c, name)| format!("{name} {c}"))
+        .collect();
+    println!("  blue's {kicks} kicks ended in: {}", outcomes.join(", "));
     for (k, row) in counts.iter().enumerate() {
         let (n, shares) = action_shares(row);
         println!("  {} ({n} ticks): {shares}", KINDS[k]);

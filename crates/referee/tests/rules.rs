@@ -568,6 +568,30 @@ fn default_config_is_the_shipped_file() {
     assert_eq!(again, from_file);
 }
 
+/// Every training recipe shipped in `assets/` (`train*.toml`) is a valid
+/// match configuration: a recipe that fails to load fails only when someone
+/// starts a long run with it.
+#[test]
+fn shipped_training_recipes_load() {
+    let assets = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets");
+    let mut recipes: Vec<_> = std::fs::read_dir(assets)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            let name = p.file_name().unwrap().to_string_lossy();
+            name.starts_with("train") && name.ends_with(".toml")
+        })
+        .collect();
+    recipes.sort();
+    assert!(recipes.len() >= 6, "{recipes:?}");
+    for p in &recipes {
+        let text = std::fs::read_to_string(p).unwrap();
+        if let Err(e) = MatchConfig::from_toml_str(&text) {
+            panic!("{}: {e}", p.display());
+        }
+    }
+}
+
 #[test]
 fn bad_config_errors_name_the_field() {
     let err = MatchConfig::from_toml_str("[rules]\nb_d = -1.0\n")
