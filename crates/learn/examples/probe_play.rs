@@ -4,6 +4,10 @@
 //! robot took. Unlike `probe` (states built by hand) nothing here is off the
 //! team's own state distribution.
 //!
+//! It also says what became of the team's kicks (a pass, the kicker's own
+//! control again, an opponent's, a goal, the ball out) and how long the
+//! passes among them were.
+//!
 //! `cargo run --release -p naosoccer-learn --example probe_play -- ppo:DIR [OPPONENT] [MATCHES]`
 
 use naosoccer_client::policy::{Policy, PolicyKind};
@@ -14,12 +18,13 @@ use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEA
 use naosoccer_referee::{Match, MatchConfig};
 
 const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
-const OUTCOMES: [&str; 5] = [
+const OUTCOMES: [&str; 6] = [
     "a pass",
     "the kicker's control",
     "an opponent's control",
     "a goal",
     "the ball out",
+    "another kick first",
 ];
 const KINDS: [&str; 7] = [
     "ball in kick reach, facing the opponent half",
@@ -131,8 +136,13 @@ fn main() {
     // What became of blue's kicks: the first of a pass, the kicker's own
     // control again, an opponent's control, a goal, the ball out.
     let mut kick_outcomes = [0u64; OUTCOMES.len()];
-    // The pending kick: the kicker, and whether it went forward.
+    // Lengths of the passes that settled a kick: under 1 m, 1-2 m, 2 m on.
+    let mut pass_lengths = [0u64; 3];
+    // The pending kick's kicker, and whether the ball has left its control
+    // since (right after the kick it may still be within reach).
     let mut pending: Option<RobotId> = None;
+    let mut left = false;
+    let (mut stat_passes, mut stat_shots) = (0u64, 0u64);
     for seed in 0..matches {
         let mut m = Match::new(&cfg, 1_000_000 + seed).expect("a match");
         team.set_match_seed(m.seed());
@@ -167,37 +177,52 @@ fn main() {
                 acts[PLAYERS_PER_TEAM + i] = red.act(&o);
             }
             let events = m.step(&acts).to_vec();
-            let mut settled = None;
+            // In order: a kick opens, a pass, goal or out settles (a pass may
+            // come in the kick's own tick, to a teammate at the ball).
             for e in &events {
-                match *e {
-                    Event::Pass { from, .. } if Some(from) == pending => settled = Some(0),
-                    Event::Goal { .. } if pending.is_some() => settled = Some(3),
-                    Event::BallOut { .. } if pending.is_some() => settled = Some(4),
-                    _ => {}
+                let settled = match *e {
+                    Event::Kick { robot, .. } => {
+                        if pending.is_some() {
+                            kick_outcomes[5] += 1;
+                        }
+                        pending = (robot.team() == Team::Blue).then_some(robot);
+                        left = false;
+                        None
+                    }
+                    Event::Pass { from, distance, .. } if Some(from) == pending => {
+                        pass_lengths
+                            [usize::from(distance >= 1.0) + usize::from(distance >= 2.0)] += 1;
+                        Some(0)
+                    }
+                    Event::Goal { .. } => Some(3),
+                    Event::BallOut { .. } => Some(4),
+                    _ => None,
+                };
+                if let (Some(k), true) = (settled, pending.is_some()) {
+                    kick_outcomes[k] += 1;
+                    pending = None;
                 }
             }
-            if settled.is_none() && pending.is_some() {
-                if let Some(c) = m.controller() {
-                    settled = Some(if Some(c) == pending {
-                        1
-                    } else if c.team() == Team::Blue {
-                        0
-                    } else {
-                        2
-                    });
-                }
-            }
-            if let Some(k) = settled {
-                kick_outcomes[k] += 1;
-                pending = None;
-            }
-            for e in &events {
-                if let Event::Kick { robot, .. } = *e {
-                    pending = (robot.team() == Team::Blue).then_some(robot);
+            if pending.is_some() {
+                let settled = match m.controller() {
+                    Some(c) if Some(c) == pending => left.then_some(1),
+                    Some(c) if c.team() == Team::Blue => Some(0),
+                    Some(_) => Some(2),
+                    None => {
+                        left = true;
+                        None
+                    }
+                };
+                if let Some(k) = settled {
+                    kick_outcomes[k] += 1;
+                    pending = None;
                 }
             }
         }
         pending = None;
+        let st = m.stats();
+        stat_passes += u64::from(st.team(Team::Blue).passes);
+        stat_shots += u64::from(st.team(Team::Blue).shots);
     }
     println!("{spec} as blue against {opponent}, {matches} matches: actions taken by free robots");
     let kicks: u64 = kick_outcomes.iter().sum();
@@ -206,7 +231,14 @@ fn main() {
         .zip(OUTCOMES)
         .map(|(c, name)| format!("{name} {c}"))
         .collect();
-    println!("  blue's {kicks} kicks ended in: {}", outcomes.join(", "));
+    println!(
+        "  blue's {kicks} kicks ended in: {} (the statistics: {stat_passes} passes, {stat_shots} shots)",
+        outcomes.join(", ")
+    );
+    println!(
+        "  of those passes, {} were shorter than 1 m, {} 1-2 m and {} longer",
+        pass_lengths[0], pass_lengths[1], pass_lengths[2]
+    );
     for (k, row) in counts.iter().enumerate() {
         let (n, shares) = action_shares(row);
         println!("  {} ({n} ticks): {shares}", KINDS[k]);
