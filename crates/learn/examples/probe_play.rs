@@ -15,6 +15,7 @@ use naosoccer_learn::obs::ball_in_robot_frame;
 use naosoccer_learn::policy::is_free;
 use naosoccer_learn::LearnedPolicy;
 use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_referee::rules::segment_distance;
 use naosoccer_referee::{Match, MatchConfig};
 
 const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
@@ -73,12 +74,11 @@ fn pass_on(o: &Observation) -> bool {
         let (dx, dy) = (m.x - me.x, m.y - me.y);
         let (ahead, side) = (c * dx + s * dy, -s * dx + c * dy);
         let d = ahead.hypot(side);
-        let open = o.opponents.iter().filter(|q| !q.fallen).all(|q| {
-            let (ux, uy) = (m.x - o.ball.x, m.y - o.ball.y);
-            let (vx, vy) = (q.x - o.ball.x, q.y - o.ball.y);
-            let t = ((ux * vx + uy * vy) / (ux * ux + uy * uy).max(1e-9)).clamp(0.0, 1.0);
-            (vx - t * ux).hypot(vy - t * uy) > 0.3
-        });
+        let open = o
+            .opponents
+            .iter()
+            .filter(|q| !q.fallen)
+            .all(|q| segment_distance([o.ball.x, o.ball.y], [m.x, m.y], [q.x, q.y]) > 0.3);
         (1.0..=3.0).contains(&d) && side.atan2(ahead).abs() <= 15f32.to_radians() && open
     })
 }

@@ -23,6 +23,7 @@
 //! always attacks +x).
 
 use naosoccer_proto::{Observation, RobotObs, PLAYERS_PER_TEAM};
+use naosoccer_referee::rules::segment_distance;
 use serde::{Deserialize, Serialize};
 
 /// The layout new runs are trained on unless they choose another
@@ -151,19 +152,6 @@ impl KickReach {
         let (ahead, side) = ball_in_robot_frame(obs);
         self.contains(ahead, side)
     }
-}
-
-/// The distance from point `p` to the segment `a`-`b`.
-fn segment_distance(a: [f32; 2], b: [f32; 2], p: [f32; 2]) -> f32 {
-    let (ux, uy) = (b[0] - a[0], b[1] - a[1]);
-    let (vx, vy) = (p[0] - a[0], p[1] - a[1]);
-    let len2 = ux * ux + uy * uy;
-    let t = if len2 < 1e-12 {
-        0.0
-    } else {
-        ((ux * vx + uy * vy) / len2).clamp(0.0, 1.0)
-    };
-    (vx - t * ux).hypot(vy - t * uy)
 }
 
 fn default_match_seconds() -> f32 {

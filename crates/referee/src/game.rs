@@ -11,8 +11,8 @@ use naosoccer_sim::{Command as SimCommand, RobotModel, Sim, SimError, StateHashe
 use crate::config::{ConfigError, MatchConfig, RewardConfig};
 use crate::observe::{self, ObsContext};
 use crate::rules::{
-    Clock, Command, FallRule, Field, GoalRule, KickOff, OutOfBoundsRule, Outcome, PassMade,
-    PassRule, PossessionRule, SetPlayRule,
+    segment_distance, Clock, Command, FallRule, Field, GoalRule, KickOff, OutOfBoundsRule, Outcome,
+    PassMade, PassRule, PossessionRule, SetPlayRule,
 };
 
 /// Why a match could not be set up.
@@ -644,26 +644,17 @@ fn aims_at_teammate(
 /// of the segment from `from` to `to` (world frame).
 fn lane_clear(
     snap: &naosoccer_sim::Snapshot,
-    team: naosoccer_proto::Team,
+    team: Team,
     from: [f32; 2],
     to: [f32; 2],
     width: f32,
 ) -> bool {
-    let (sx, sy) = (to[0] - from[0], to[1] - from[1]);
-    let len2 = sx * sx + sy * sy;
-    (0..PLAYERS_PER_TEAM).all(|p| {
-        let Some(o) = RobotId::new(team.other(), p) else {
-            return true;
-        };
-        let q = &snap.robots[o.index()].pos;
-        let (qx, qy) = (q[0] - from[0], q[1] - from[1]);
-        let t = if len2 > 0.0 {
-            ((qx * sx + qy * sy) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        (qx - t * sx).hypot(qy - t * sy) > width
-    })
+    (0..PLAYERS_PER_TEAM)
+        .filter_map(|p| RobotId::new(team.other(), p))
+        .all(|o| {
+            let q = &snap.robots[o.index()].pos;
+            segment_distance(from, to, [q[0], q[1]]) > width
+        })
 }
 
 /// `sign(s) * ln(1 + |s|)`: keeps the sign, compresses the size.

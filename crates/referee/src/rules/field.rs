@@ -36,6 +36,20 @@ impl Field {
     }
 }
 
+/// The distance from point `p` to the segment `a`-`b` (a point when the
+/// two ends meet).
+pub fn segment_distance(a: [f32; 2], b: [f32; 2], p: [f32; 2]) -> f32 {
+    let (ux, uy) = (b[0] - a[0], b[1] - a[1]);
+    let (vx, vy) = (p[0] - a[0], p[1] - a[1]);
+    let len2 = ux * ux + uy * uy;
+    let t = if len2 < 1e-12 {
+        0.0
+    } else {
+        ((ux * vx + uy * vy) / len2).clamp(0.0, 1.0)
+    };
+    (vx - t * ux).hypot(vy - t * uy)
+}
+
 /// Angle wrapped to (-pi, pi].
 pub fn wrap_angle(a: f32) -> f32 {
     use std::f32::consts::{PI, TAU};

@@ -21,7 +21,7 @@ pub(crate) mod testing;
 
 pub use clock::Clock;
 pub use fall::FallRule;
-pub use field::{last_touch, wrap_angle, Field};
+pub use field::{last_touch, segment_distance, wrap_angle, Field};
 pub use goal::GoalRule;
 pub use kickoff::KickOff;
 pub use out_of_bounds::OutOfBoundsRule;
