@@ -200,7 +200,7 @@ impl LiveMatch {
 /// match, so the recording is finished from the last tick's callback.
 struct MatchRecording {
     path: PathBuf,
-    rec: Option<Recorder<std::fs::File>>,
+    rec: Option<Recorder>,
     summary: Option<RecordingSummary>,
     error: Option<anyhow::Error>,
 }
@@ -360,12 +360,7 @@ pub fn bench_sim(args: BenchSimArgs) -> anyhow::Result<()> {
     // The recorder's own time (start, every tick, finish), apart from the
     // match's: the write time of the recording.
     let mut writing = Instant::now();
-    let mut rec = Some(Recorder::new(
-        std::io::Cursor::new(Vec::with_capacity(8 << 20)),
-        &meta,
-        &m,
-        RecorderOptions::default(),
-    )?);
+    let mut rec = Some(Recorder::in_memory(&meta, &m, RecorderOptions::default())?);
     let mut write_time = writing.elapsed();
     let mut bytes = 0;
     let policies = runner::build_policies(args.seed, &scripted, &scripted);
@@ -374,8 +369,8 @@ pub fn bench_sim(args: BenchSimArgs) -> anyhow::Result<()> {
             writing = Instant::now();
             r.tick(m, actions, events).expect("recording to memory");
             if m.is_finished() {
-                let (_, cursor) = rec.take().unwrap().finish(m).expect("finishing in memory");
-                bytes = cursor.into_inner().len();
+                let (_, sink) = rec.take().unwrap().finish(m).expect("finishing in memory");
+                bytes = sink.into_bytes().map_or(0, |b| b.len());
             }
             write_time += writing.elapsed();
         }

@@ -29,7 +29,7 @@ pub use messages::{
 };
 pub use reader::Recording;
 pub use replay::{replay, ReplayOutcome};
-pub use writer::{Recorder, RecorderOptions, RecordingSummary};
+pub use writer::{Recorder, RecorderOptions, RecordingSummary, Sink};
 
 /// Topics, in the order their channels are created.
 pub mod topics {

@@ -2,7 +2,7 @@
 
 use std::collections::BTreeMap;
 use std::fs::File;
-use std::io::{Seek, Write};
+use std::io::{Cursor, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use ::foxglove::messages::{FrameTransforms, SceneUpdate};
@@ -59,11 +59,65 @@ enum Ch {
     Tf,
 }
 
+/// Where a recording goes: a file, or a buffer in memory.
+///
+/// A concrete type rather than a type parameter, so that the recorder's
+/// code (JSON encoding, the MCAP writer) is compiled once, optimised, in
+/// this crate, whatever crate records: a generic recorder was compiled
+/// again in every caller, at the caller's optimisation level.
+#[derive(Debug)]
+pub enum Sink {
+    File(File),
+    Memory(Cursor<Vec<u8>>),
+}
+
+impl Sink {
+    /// The bytes of a recording made in memory; `None` for a file.
+    pub fn into_bytes(self) -> Option<Vec<u8>> {
+        match self {
+            Sink::File(_) => None,
+            Sink::Memory(c) => Some(c.into_inner()),
+        }
+    }
+}
+
+impl Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self {
+            Sink::File(f) => f.write(buf),
+            Sink::Memory(c) => c.write(buf),
+        }
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
+        match self {
+            Sink::File(f) => f.write_all(buf),
+            Sink::Memory(c) => c.write_all(buf),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Sink::File(f) => f.flush(),
+            Sink::Memory(c) => c.flush(),
+        }
+    }
+}
+
+impl Seek for Sink {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        match self {
+            Sink::File(f) => f.seek(pos),
+            Sink::Memory(c) => c.seek(pos),
+        }
+    }
+}
+
 /// Writes one match. Call [`Recorder::tick`] after every `Match::step` and
 /// [`Recorder::finish`] at the end; dropping a recorder without `finish`
 /// leaves a file whose completed chunks are still readable.
-pub struct Recorder<W: Write + Seek> {
-    writer: Writer<W>,
+pub struct Recorder {
+    writer: Writer<Sink>,
     channel_ids: [u16; 7],
     sequences: [u32; 7],
     tick_ns: u64,
@@ -72,7 +126,7 @@ pub struct Recorder<W: Write + Seek> {
     state: Option<StateRecord>,
 }
 
-impl Recorder<File> {
+impl Recorder {
     /// Creates (or truncates) `path` and writes the match's start.
     pub fn create(
         path: &Path,
@@ -88,13 +142,27 @@ impl Recorder<File> {
         // Unbuffered on purpose: the MCAP writer already gathers a whole
         // chunk before writing, and a chunk must reach the file as soon as
         // it is complete for a killed server to leave it readable.
-        Recorder::new(File::create(path)?, meta, m, opts)
+        Recorder::new(Sink::File(File::create(path)?), meta, m, opts)
     }
-}
 
-impl<W: Write + Seek> Recorder<W> {
+    /// Records into memory; [`Recorder::finish`] hands back the bytes
+    /// ([`Sink::into_bytes`]).
+    pub fn in_memory(
+        meta: &MatchMeta,
+        m: &Match,
+        opts: RecorderOptions,
+    ) -> Result<Self, RecordError> {
+        Recorder::new(
+            Sink::Memory(Cursor::new(Vec::with_capacity(8 << 20))),
+            meta,
+            m,
+            opts,
+        )
+    }
+
+    /// Writes the match's start to `w`.
     pub fn new(
-        w: W,
+        w: Sink,
         meta: &MatchMeta,
         m: &Match,
         opts: RecorderOptions,
@@ -109,7 +177,7 @@ impl<W: Write + Seek> Recorder<W> {
             .library(format!("naosoccer {}", env!("CARGO_PKG_VERSION")));
         let mut writer = options.create(w)?;
         let json_schema =
-            |w: &mut Writer<W>, name: &str, data: &[u8]| w.add_schema(name, "jsonschema", data);
+            |w: &mut Writer<Sink>, name: &str, data: &[u8]| w.add_schema(name, "jsonschema", data);
         let meta_s = json_schema(&mut writer, "naosoccer.MatchMeta", b"{\"type\":\"object\"}")?;
         let act_s = json_schema(
             &mut writer,
@@ -125,8 +193,9 @@ impl<W: Write + Seek> Recorder<W> {
         )?;
         // The Foxglove channels: the SDK's schemas (protobuf descriptors,
         // constants of the SDK build) and its protobuf messages.
-        let sdk_schema =
-            |w: &mut Writer<W>, s: ::foxglove::Schema| w.add_schema(&s.name, &s.encoding, &s.data);
+        let sdk_schema = |w: &mut Writer<Sink>, s: ::foxglove::Schema| {
+            w.add_schema(&s.name, &s.encoding, &s.data)
+        };
         let scene_s = sdk_schema(&mut writer, foxglove::schema::<SceneUpdate>())?;
         let tf_s = sdk_schema(&mut writer, foxglove::schema::<FrameTransforms>())?;
         let schemas = [meta_s, act_s, state_s, event_s, stats_s, scene_s, tf_s];
@@ -245,7 +314,7 @@ impl<W: Write + Seek> Recorder<W> {
 
     /// Writes the final statistics, the summary and the index, and returns
     /// the number of messages per channel and the underlying writer.
-    pub fn finish(mut self, m: &Match) -> Result<(RecordingSummary, W), RecordError> {
+    pub fn finish(mut self, m: &Match) -> Result<(RecordingSummary, Sink), RecordError> {
         let naosoccer_proto::PerTeam { blue, red } = m.score();
         let fin = FinalRecord {
             ticks: m.tick().get(),

@@ -47,7 +47,7 @@ fn record(cfg: &MatchConfig, seed: u64, opts: RecorderOptions) -> (Vec<u8>, Reco
             kind.build(seed, r)
         })
         .collect();
-    let mut rec = Recorder::new(Cursor::new(Vec::new()), &meta(cfg, seed, &m), &m, opts).unwrap();
+    let mut rec = Recorder::in_memory(&meta(cfg, seed, &m), &m, opts).unwrap();
     let mut obs = blank_observation();
     while !m.is_finished() {
         let mut actions = [Action::Stay; ROBOTS];
@@ -58,8 +58,8 @@ fn record(cfg: &MatchConfig, seed: u64, opts: RecorderOptions) -> (Vec<u8>, Reco
         let events = m.step(&actions).to_vec();
         rec.tick(&m, &actions, &events).unwrap();
     }
-    let (summary, cursor) = rec.finish(&m).unwrap();
-    (cursor.into_inner(), summary)
+    let (summary, sink) = rec.finish(&m).unwrap();
+    (sink.into_bytes().expect("recorded in memory"), summary)
 }
 
 #[test]

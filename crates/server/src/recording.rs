@@ -4,7 +4,6 @@
 //! Recording never stops a match: a recorder that fails (disk full, say) is
 //! logged once and dropped, and the match plays on.
 
-use std::fs::File;
 use std::path::{Path, PathBuf};
 
 use naosoccer_proto::msg::{EndReason, Fill, MatchEnd, MatchInfo, Mode};
@@ -18,7 +17,7 @@ use crate::ServerConfig;
 pub struct McapObserver {
     dir: PathBuf,
     path: PathBuf,
-    rec: Option<Recorder<File>>,
+    rec: Option<Recorder>,
 }
 
 impl McapObserver {
