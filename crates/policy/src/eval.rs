@@ -20,7 +20,7 @@
 
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::{
-    Action, MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
+    Action, Event, MatchStats, Observation, PerTeam, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_referee::{Match, MatchConfig};
 use serde::{Deserialize, Serialize};
@@ -157,10 +157,19 @@ pub struct MatchResult {
     /// By colour.
     pub score: Score,
     pub stats: MatchStats,
+    /// By colour: passes of at least [`LONG_PASS_METRES`].
+    pub long_passes: PerTeam<u32>,
     pub state_hash: u64,
     /// The first team (`--blue`) played red.
     pub swapped: bool,
 }
+
+/// A pass this long or longer (m, from where the ball was kicked to where
+/// the receiver took control) counts among the long passes. Most passes
+/// the statistics count are kicks into a teammate standing at the ball,
+/// under a metre (docs/LEARNING.md); a pass of a metre or more moves the
+/// ball between players who stand apart.
+pub const LONG_PASS_METRES: f32 = 1.0;
 
 impl MatchResult {
     /// The colour the first team (`first`: true) or the second played.
@@ -188,6 +197,7 @@ impl MatchResult {
             goals: pair(&|first| self.goals_of(first)),
             control_rate_percent: [true, false].map(|first| 100.0 * team(first).control_rate),
             passes: pair(&|first| team(first).passes),
+            long_passes: pair(&|first| *self.long_passes.get(self.team_of(first))),
             shots: pair(&|first| team(first).shots),
             state_hash: self.state_hash,
         }
@@ -209,6 +219,10 @@ pub struct MatchRecord {
     /// Each team's share of the ticks in which a team controlled the ball.
     pub control_rate_percent: [f64; 2],
     pub passes: [u32; 2],
+    /// Passes of at least [`LONG_PASS_METRES`] (0 in reports written
+    /// before they were counted).
+    #[serde(default)]
+    pub long_passes: [u32; 2],
     pub shots: [u32; 2],
     /// The match's final state hash (the same on every machine of one build).
     pub state_hash: u64,
@@ -219,6 +233,8 @@ struct Slot {
     obs: Vec<Observation>,
     policies: Vec<Option<Box<dyn Policy>>>,
     decided: [Action; ROBOTS],
+    /// By colour, so far.
+    long_passes: PerTeam<u32>,
     swapped: bool,
     index: usize,
 }
@@ -257,6 +273,7 @@ pub fn play_matches(
                 .collect(),
             policies,
             decided: [Action::Stay; ROBOTS],
+            long_passes: PerTeam::default(),
             swapped,
             index: i,
             m,
@@ -317,6 +334,7 @@ pub fn play_matches(
             seed: s.m.seed(),
             score: s.m.score(),
             stats: s.m.stats(),
+            long_passes: s.long_passes,
             state_hash: s.m.state_hash(),
             swapped: s.swapped,
         })
@@ -347,7 +365,13 @@ fn step_slot(slot: &mut Slot) {
             slot.decided[i] = p.act(&slot.obs[i]);
         }
     }
-    slot.m.step(&slot.decided);
+    for e in slot.m.step(&slot.decided) {
+        if let Event::Pass { from, distance, .. } = *e {
+            if distance >= LONG_PASS_METRES {
+                *slot.long_passes.get_mut(from.team()) += 1;
+            }
+        }
+    }
     observe_all(slot);
 }
 
@@ -492,6 +516,8 @@ pub struct TeamSummary {
     /// In percent.
     pub control_rate: Estimate,
     pub passes: Estimate,
+    /// Passes of at least [`LONG_PASS_METRES`].
+    pub long_passes: Estimate,
     pub shots: Estimate,
     pub wins: usize,
     pub draws: usize,
@@ -531,6 +557,7 @@ pub fn summarise(records: &[MatchRecord], first_name: &str, second_name: &str) -
             goals: col(&|r| f64::from(r.goals[k])),
             control_rate: col(&|r| r.control_rate_percent[k]),
             passes: col(&|r| f64::from(r.passes[k])),
+            long_passes: col(&|r| f64::from(r.long_passes[k])),
             shots: col(&|r| f64::from(r.shots[k])),
             wins,
             draws: as_blue.draws + as_red.draws,
@@ -550,7 +577,7 @@ pub fn format_table(rows: &[TeamSummary], matches: usize, first_match: usize) ->
         .any(|r| r.as_red.matches() > 0 && r.as_blue.matches() > 0);
     let mut s = format!(
         "{matches} matches{}{}, mean ± 95% CI; win % with its Wilson 95% interval\n\
-         {:<28} {:>14} {:>18} {:>16} {:>16} {:>11} {:>20}\n",
+         {:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>11} {:>20}\n",
         if first_match > 0 {
             format!(
                 " (numbers {first_match} to {} of the evaluation)",
@@ -568,17 +595,19 @@ pub fn format_table(rows: &[TeamSummary], matches: usize, first_match: usize) ->
         "average goals",
         "ball control %",
         "average passes",
+        "passes >= 1 m",
         "average shots",
         "W/D/L",
         "win %"
     );
     for r in rows {
         s.push_str(&format!(
-            "{:<28} {:>14} {:>18} {:>16} {:>16} {:>11} {:>20}\n",
+            "{:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>11} {:>20}\n",
             r.name,
             format!("{:.2}", r.goals),
             format!("{:.1}", r.control_rate),
             format!("{:.2}", r.passes),
+            format!("{:.2}", r.long_passes),
             format!("{:.2}", r.shots),
             format!("{}/{}/{}", r.wins, r.draws, r.losses),
             r.win_rate.to_string(),
@@ -732,7 +761,7 @@ impl EvalReport {
         let team = |r: &TeamSummary| {
             json!({
                 "name": r.name, "goals": est(&r.goals), "control_rate_percent": est(&r.control_rate),
-                "passes": est(&r.passes), "shots": est(&r.shots),
+                "passes": est(&r.passes), "long_passes": est(&r.long_passes), "shots": est(&r.shots),
                 "wins": r.wins, "draws": r.draws, "losses": r.losses,
                 "win_rate": rate(&r.win_rate), "as_blue": rec(&r.as_blue), "as_red": rec(&r.as_red),
             })
@@ -1028,6 +1057,71 @@ mod tests {
         assert!((first.goals.mean - f64::from(goals) / 4.0).abs() < 1e-12);
         assert_eq!(first.wins, second.losses);
         assert_eq!(first.win_rate, Rate::wilson(first.wins, 4));
+    }
+
+    /// Long passes are the `pass` events of at least `LONG_PASS_METRES`,
+    /// by the passer's team, recounted here from a replay of each match;
+    /// scripted teams make both kinds, so a count of all passes or of none
+    /// fails.
+    #[test]
+    fn long_passes_count_the_pass_events_of_a_metre_or_more() {
+        let cfg = MatchConfig {
+            minutes: 5.0,
+            ..MatchConfig::default()
+        };
+        let plan = EvalPlan {
+            matches: 2,
+            first_match: 0,
+            seed: 5,
+            both_sides: true,
+            seeds: SeedScheme::Eval,
+        };
+        let scripted = || Side::Builtin(PolicyKind::Scripted);
+        let results = play_matches(&cfg, &mut scripted(), &mut scripted(), &plan, 1).unwrap();
+        let (mut long, mut short) = (0, 0);
+        for r in &results {
+            let mut m = Match::new(&cfg, r.seed).unwrap();
+            let mut policies: Vec<_> = RobotId::all()
+                .map(|id| PolicyKind::Scripted.build(m.seed(), id))
+                .collect();
+            let mut obs = naosoccer_referee::blank_observation();
+            let mut actions = [Action::Stay; ROBOTS];
+            let mut by_colour = PerTeam::<u32>::default();
+            while !m.is_finished() {
+                for id in RobotId::all() {
+                    m.observe_into(id.team(), id.player(), &mut obs);
+                    actions[id.index()] = policies[id.index()].act(&obs);
+                }
+                for e in m.step(&actions) {
+                    if let Event::Pass { from, distance, .. } = *e {
+                        if distance >= LONG_PASS_METRES {
+                            *by_colour.get_mut(from.team()) += 1;
+                            long += 1;
+                        } else {
+                            short += 1;
+                        }
+                    }
+                }
+            }
+            assert_eq!(m.state_hash(), r.state_hash, "the replay is the match");
+            assert_eq!(r.long_passes, by_colour);
+            let rec = r.record();
+            for first in [true, false] {
+                let k = usize::from(!first);
+                assert_eq!(rec.long_passes[k], *by_colour.get(r.team_of(first)));
+                assert!(rec.long_passes[k] <= rec.passes[k]);
+            }
+        }
+        assert!(long > 0 && short > 0, "long {long}, short {short}");
+        let records: Vec<_> = results.iter().map(MatchResult::record).collect();
+        let [first, second] = summarise(&records, "a", "b");
+        let total = first.long_passes.mean * 2.0 + second.long_passes.mean * 2.0;
+        assert!((total - f64::from(long)).abs() < 1e-9);
+        // Reports written before long passes were counted still read.
+        let mut old = serde_json::to_value(&records[0]).unwrap();
+        old.as_object_mut().unwrap().remove("long_passes");
+        let back: MatchRecord = serde_json::from_value(old).unwrap();
+        assert_eq!(back.long_passes, [0, 0]);
     }
 
     /// A block of an evaluation plays its matches as the whole run does, by
