@@ -6,12 +6,20 @@
 //!
 //! It also says what became of the team's kicks (a pass, the kicker's own
 //! control again, an opponent's, a goal, the ball out) and how long the
-//! passes among them were.
+//! passes among them were, for all kicks and for those decided with a
+//! teammate open in line (a pass attempt).
 //!
-//! `cargo run --release -p naosoccer-learn --example probe_play -- ppo:DIR [OPPONENT] [MATCHES]`
+//! The team may also be a built-in one (`scripted`, `scripted:FILE.toml`),
+//! to compare with the hand-written team's passing.
+//!
+//! With `force` after MATCHES, every free robot of the team that has the
+//! ball in reach and a teammate open in line shoots, whatever its policy
+//! says: what passing there would bring.
+//!
+//! `cargo run --release -p naosoccer-learn --example probe_play -- ppo:DIR|scripted [OPPONENT] [MATCHES] [force]`
 
 use naosoccer_client::policy::{Policy, PolicyKind};
-use naosoccer_learn::obs::ball_in_robot_frame;
+use naosoccer_learn::obs::{ball_in_robot_frame, ObsScale};
 use naosoccer_learn::policy::is_free;
 use naosoccer_learn::LearnedPolicy;
 use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
@@ -19,6 +27,12 @@ use naosoccer_referee::rules::segment_distance;
 use naosoccer_referee::{Match, MatchConfig};
 
 const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
+/// The team probed: a trained one, or a built-in one robot by robot.
+enum Blue {
+    Learned(Box<LearnedPolicy>),
+    Builtin(PolicyKind, Vec<Box<dyn Policy>>),
+}
+
 const OUTCOMES: [&str; 6] = [
     "a pass",
     "the kicker's control",
@@ -122,13 +136,26 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let spec = args
         .next()
-        .expect("usage: probe_play ppo:DIR [OPPONENT] [MATCHES]");
+        .expect("usage: probe_play ppo:DIR|scripted [OPPONENT] [MATCHES]");
     let opponent = args.next().unwrap_or_else(|| "scripted".into());
     let matches: u64 = args.next().map_or(4, |m| m.parse().expect("MATCHES"));
+    let force = match args.next().as_deref() {
+        None => false,
+        Some("force") => true,
+        Some(other) => panic!("expected `force` after MATCHES, got {other:?}"),
+    };
     let opp: PolicyKind = opponent.parse().expect("a built-in opponent");
-    let mut team = LearnedPolicy::load(&spec).expect("load the policy");
-    let scale = team.scale();
     let cfg = MatchConfig::default();
+    let mut team = match spec.parse::<PolicyKind>() {
+        Ok(kind) => Blue::Builtin(kind, Vec::new()),
+        Err(_) => Blue::Learned(Box::new(
+            LearnedPolicy::load(&spec).expect("load the policy"),
+        )),
+    };
+    let reach = match &team {
+        Blue::Learned(t) => t.scale().kick,
+        Blue::Builtin(..) => ObsScale::from_config(&cfg).kick,
+    };
     let mut counts = [[0u64; NAMES.len()]; KINDS.len()];
     // Ball in kick reach with a teammate open where the kick would go.
     let mut pass_counts = [0u64; NAMES.len()];
@@ -136,6 +163,11 @@ fn main() {
     // What became of blue's kicks: the first of a pass, the kicker's own
     // control again, an opponent's control, a goal, the ball out.
     let mut kick_outcomes = [0u64; OUTCOMES.len()];
+    // The same for the kicks decided with a teammate open in line
+    // (`pass_on`), and whether each robot's last shoot was decided so.
+    let mut aimed_outcomes = [0u64; OUTCOMES.len()];
+    let mut aimed_at = [false; PLAYERS_PER_TEAM];
+    let mut pending_aimed = false;
     // Lengths of the passes that settled a kick: under 1 m, 1-2 m, 2 m on.
     let mut pass_lengths = [0u64; 3];
     // The pending kick's kicker, and whether the ball has left its control
@@ -145,7 +177,14 @@ fn main() {
     let (mut stat_passes, mut stat_shots) = (0u64, 0u64);
     for seed in 0..matches {
         let mut m = Match::new(&cfg, 1_000_000 + seed).expect("a match");
-        team.set_match_seed(m.seed());
+        match &mut team {
+            Blue::Learned(t) => t.set_match_seed(m.seed()),
+            Blue::Builtin(kind, robots) => {
+                *robots = (0..PLAYERS_PER_TEAM)
+                    .map(|i| kind.build(m.seed(), RobotId::from_index(i).unwrap()))
+                    .collect();
+            }
+        }
         let mut reds: Vec<Box<dyn Policy>> = (PLAYERS_PER_TEAM..ROBOTS)
             .map(|i| opp.build(m.seed(), RobotId::from_index(i).unwrap()))
             .collect();
@@ -154,15 +193,29 @@ fn main() {
                 .map(|p| m.observe(Team::Blue, p))
                 .collect();
             let mut acts = [Action::Stay; ROBOTS];
-            team.act_batch(&blue, &mut acts[..PLAYERS_PER_TEAM]);
+            match &mut team {
+                Blue::Learned(t) => t.act_batch(&blue, &mut acts[..PLAYERS_PER_TEAM]),
+                Blue::Builtin(_, robots) => {
+                    for ((a, r), o) in acts.iter_mut().zip(robots.iter_mut()).zip(&blue) {
+                        *a = r.act(o);
+                    }
+                }
+            }
             for (p, o) in blue.iter().enumerate() {
                 // Free robots only: a lying or kicking robot's action does
                 // nothing. A movement held for a few ticks counts each tick.
                 if is_free(o) {
-                    let in_reach = scale.kick.in_reach(o);
+                    let in_reach = reach.in_reach(o);
                     counts[kind(o, in_reach)][acts[p].index()] += 1;
-                    if in_reach && pass_on(o) {
+                    let open = in_reach && pass_on(o);
+                    if open && force {
+                        acts[p] = Action::Shoot;
+                    }
+                    if open {
                         pass_counts[acts[p].index()] += 1;
+                    }
+                    if acts[p] == Action::Shoot {
+                        aimed_at[p] = open;
                     }
                     if in_reach {
                         reach_ticks += 1;
@@ -184,8 +237,10 @@ fn main() {
                     Event::Kick { robot, .. } => {
                         if pending.is_some() {
                             kick_outcomes[5] += 1;
+                            aimed_outcomes[5] += u64::from(pending_aimed);
                         }
                         pending = (robot.team() == Team::Blue).then_some(robot);
+                        pending_aimed = pending.is_some() && aimed_at[robot.player()];
                         left = false;
                         None
                     }
@@ -200,6 +255,7 @@ fn main() {
                 };
                 if let (Some(k), true) = (settled, pending.is_some()) {
                     kick_outcomes[k] += 1;
+                    aimed_outcomes[k] += u64::from(pending_aimed);
                     pending = None;
                 }
             }
@@ -215,6 +271,7 @@ fn main() {
                 };
                 if let Some(k) = settled {
                     kick_outcomes[k] += 1;
+                    aimed_outcomes[k] += u64::from(pending_aimed);
                     pending = None;
                 }
             }
@@ -224,17 +281,28 @@ fn main() {
         stat_passes += u64::from(st.team(Team::Blue).passes);
         stat_shots += u64::from(st.team(Team::Blue).shots);
     }
-    println!("{spec} as blue against {opponent}, {matches} matches: actions taken by free robots");
-    let kicks: u64 = kick_outcomes.iter().sum();
-    let outcomes: Vec<String> = kick_outcomes
-        .iter()
-        .zip(OUTCOMES)
-        .map(|(c, name)| format!("{name} {c}"))
-        .collect();
+    let forced = if force {
+        " (forced to shoot with a teammate open in line)"
+    } else {
+        ""
+    };
     println!(
-        "  blue's {kicks} kicks ended in: {} (the statistics: {stat_passes} passes, {stat_shots} shots)",
-        outcomes.join(", ")
+        "{spec} as blue against {opponent}, {matches} matches{forced}: actions taken by free robots"
     );
+    let tally = |counts: &[u64; OUTCOMES.len()]| -> (u64, String) {
+        let text: Vec<String> = counts
+            .iter()
+            .zip(OUTCOMES)
+            .map(|(c, name)| format!("{name} {c}"))
+            .collect();
+        (counts.iter().sum(), text.join(", "))
+    };
+    let (kicks, outcomes) = tally(&kick_outcomes);
+    println!(
+        "  blue's {kicks} kicks ended in: {outcomes} (the statistics: {stat_passes} passes, {stat_shots} shots)"
+    );
+    let (aimed, outcomes) = tally(&aimed_outcomes);
+    println!("  {aimed} of them decided with a teammate open 1-3 m ahead (+-15 deg) ended in: {outcomes}");
     println!(
         "  of those passes, {} were shorter than 1 m, {} 1-2 m and {} longer",
         pass_lengths[0], pass_lengths[1], pass_lengths[2]
