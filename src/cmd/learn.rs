@@ -35,8 +35,11 @@ fn parse_players(s: &str) -> Result<Vec<usize>, String> {
   naosoccer train --algo dqn --steps 2000000 --seed 1 --out runs/dqn-1
   naosoccer train --algo dqn --preset team --steps 3000000 --seed 1 --out runs/dqn-team-1
   naosoccer train --algo ppo --preset cleanrl --opponent self-play:200000 --out runs/ppo-sp
-  naosoccer train --algo ppo --preset team --config assets/train-team.toml --steps 20000000 \
-                  --seed 1 --checkpoint-every 500000 --out runs/ppo-team-1
+  naosoccer train --algo ppo --preset team --config assets/train-team-lane.toml --obs-version 3 \
+                  --minutes 10 --steps 40000000 --seed 1 --threads 1 --checkpoint-every 1000000 \
+                  --opponent \"schedule:idle@1000000,random@3000000,scripted@8000000,scripted+scripted:assets/scripted/hound.toml+pool=2\" \
+                  --out runs/ppo-team-1      # the shipped ppo-team-seed1 (docs/LEARNING.md)
+  naosoccer train --resume runs/ppo-team-1   # go on after a stop, bit for bit
 
 Presets (--preset, PPO): paper (the paper's Algorithm 2, every robot decides
 every tick), cleanrl (GAE, advantage normalisation, grad-norm clipping,
