@@ -32,6 +32,11 @@ pub fn config(ticks: u32) -> ServerConfig {
             admin: Some(ADMIN.into()),
         },
         seed: 42,
+        // Lockstep ticks wait a minute for actions, not the default second:
+        // on a loaded machine (a panicking match printing its backtrace, a
+        // training run beside the suite) a prompt client can take longer,
+        // and its robots would "stay". Tests of the deadline set their own.
+        deadline_ms: 60_000,
         ..ServerConfig::default()
     };
     cfg.match_cfg.minutes = ticks as f32 / (60.0 * cfg.match_cfg.control_hz);
