@@ -110,6 +110,18 @@ pub struct TrainArgs {
     /// degrees of straight behind it, facing it +-30 degrees.
     #[arg(long, value_parser = ["anywhere", "behind"])]
     drill: Option<String>,
+    /// PPO team preset: of the --matches played side by side, the last N
+    /// play pass drills instead of whole matches: episodes of
+    /// --pass-drill-seconds that start with a learner's ball at its feet and
+    /// a teammate 1.2-2.5 m ahead in its line, facing the ball, the
+    /// opponents of the run's mix at least 1.2 m away; the match then plays
+    /// on. A drill's end is bootstrapped, as the match would go on.
+    #[arg(long, value_name = "N")]
+    pass_drills: Option<usize>,
+    /// Length of one pass drill, seconds of game time; it must divide the
+    /// match's length.
+    #[arg(long, default_value_t = 30.0, requires = "pass_drills")]
+    pass_drill_seconds: f32,
     /// Observation layout version: 2 (the default), 3 (version 2 plus the
     /// pass picture: teammates seen from the robot, whether they face the
     /// ball, how clear the lane to them is) or 1 (the shipped paper-era
@@ -248,6 +260,19 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         Some(_) => Some(naosoccer_learn::env::Drill::default()),
         None => None,
     };
+    if let Some(n) = a.pass_drills {
+        let hz = cfg.match_config.control_hz;
+        let ticks = f64::from(a.pass_drill_seconds) * f64::from(hz);
+        anyhow::ensure!(
+            a.pass_drill_seconds > 0.0 && (ticks - ticks.round()).abs() < 1e-6,
+            "--pass-drill-seconds {} is not a whole number of control ticks ({hz} a second)",
+            a.pass_drill_seconds
+        );
+        cfg.pass_drills = Some(naosoccer_learn::env::PassDrills {
+            matches: n,
+            ticks: ticks.round() as u64,
+        });
+    }
     if let Some(e) = a.epsilon {
         cfg.dqn.epsilon = e;
         if cfg.dqn.epsilon_decay == 0 {

@@ -9,7 +9,7 @@ use naosoccer_referee::MatchConfig;
 use serde::{Deserialize, Serialize};
 
 use crate::dqn::DqnConfig;
-use crate::env::Drill;
+use crate::env::{Drill, PassDrills};
 use crate::obs::{ObsScale, OBS_VERSION};
 use crate::ppo::PpoConfig;
 use crate::schedule::Schedule;
@@ -93,6 +93,9 @@ pub struct TrainConfig {
     /// Drill episodes instead of matches (see `env::Drill`).
     #[serde(default)]
     pub drill: Option<Drill>,
+    /// Pass drills mixed into the matches (see `env::PassDrills`).
+    #[serde(default)]
+    pub pass_drills: Option<PassDrills>,
 }
 
 impl TrainConfig {
@@ -114,6 +117,7 @@ impl TrainConfig {
             obs_scale: ObsScale::from_config(&match_config),
             match_config,
             drill: None,
+            pass_drills: None,
         }
     }
 }

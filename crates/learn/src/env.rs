@@ -75,6 +75,46 @@ struct Slot {
     /// Index of this episode's opponent.
     opp: usize,
     drill: Option<Drill>,
+    /// This match plays pass drills of this many control ticks (see
+    /// [`PassDrills`]).
+    pass_drill: Option<u64>,
+}
+
+/// Pass drills mixed into a run's matches: the last `matches` of the
+/// matches played side by side (with an even number, as many as blue as as
+/// red) play episodes of `ticks` control ticks, each staged as a pass.
+///
+/// In the learner's frame (attacking +x): the ball at a random spot
+/// (x in -2..1.5, |y| <= 1.6), a learning robot 0.2 m behind it with the
+/// ball straight ahead, facing within 60 degrees of the opponent goal;
+/// a teammate 1.2-2.5 m further on, within 0.15 rad (9 degrees) of the
+/// kicker's heading, facing the ball; the other teammates anywhere in the
+/// field at least 1 m from the ball; the opponent keeper before its goal
+/// and the other opponents at least 1.2 m from the ball and 0.5 m from the
+/// line from ball to receiver, facing the ball. The match then plays on
+/// as any match, against the episode's opponent from the run's mix.
+///
+/// A drill episode is cut after `ticks` ticks as a rollout's edge cuts one:
+/// its last transition is bootstrapped with the critic's value of the state
+/// reached, since the match would go on (the observation's clock says so).
+/// `ticks` must divide a match's length, so that every match still ends
+/// together at a match's end (a checkpoint's boundary). Drill episodes are
+/// not reported among finished episodes (goals, returns).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct PassDrills {
+    pub matches: usize,
+    pub ticks: u64,
+}
+
+impl PassDrills {
+    /// Distance from the kicker's torso to the ball's centre at the start.
+    pub const KICKER_DISTANCE: f32 = 0.2;
+    /// The receiver's distance from the ball, metres.
+    pub const RECEIVER: (f32, f32) = (1.2, 2.5);
+    /// The receiver's largest angle off the kicker's heading, radians.
+    pub const LANE_ANGLE: f32 = 0.15;
+    /// The kicker's largest heading off +x, radians (60 degrees).
+    pub const HEADING: f32 = std::f32::consts::FRAC_PI_3;
 }
 
 /// A drill instead of a match: the learning robots alone before the
@@ -138,6 +178,10 @@ pub struct VecEnv {
     feats: Vec<f32>,
     rewards: Vec<f32>,
     dones: Vec<bool>,
+    /// Rows whose episode was cut (a pass drill's end) with the last step.
+    truncated: Vec<bool>,
+    /// Those rows' observation vectors at the cut (before the restart).
+    final_feats: Vec<f32>,
     opp_actions: Vec<usize>,
     ticks: u64,
 }
@@ -230,6 +274,7 @@ impl VecEnv {
                 finished: None,
                 opp: 0,
                 drill: None,
+                pass_drill: None,
             };
             slot.build_policies(&env, &mix);
             slot.observe_all();
@@ -241,6 +286,8 @@ impl VecEnv {
             feats: vec![0.0; env.matches * l * OBS_DIM],
             rewards: vec![0.0; env.matches * l],
             dones: vec![false; env.matches * l],
+            truncated: vec![false; env.matches * l],
+            final_feats: vec![0.0; env.matches * l * OBS_DIM],
             opp_actions: Vec::new(),
             env,
             scale,
@@ -291,6 +338,20 @@ impl VecEnv {
     /// is then already the first of the next episode).
     pub fn dones(&self) -> &[bool] {
         &self.dones
+    }
+
+    /// Whether each row's episode ended with the last step by being cut (a
+    /// pass drill's end, [`PassDrills`]) rather than by the match's end:
+    /// its last transition is then bootstrapped from [`Self::final_observations`].
+    pub fn truncated(&self) -> &[bool] {
+        &self.truncated
+    }
+
+    /// For the rows [`Self::truncated`] by the last step: their observation
+    /// vectors in the state where the episode was cut, `[rows, OBS_DIM]`
+    /// (other rows hold stale values).
+    pub fn final_observations(&self) -> &[f32] {
+        &self.final_feats
     }
 
     /// Encodes observations with `scale` from now on (e.g. an older layout
@@ -346,6 +407,38 @@ impl VecEnv {
         self.restart_at(&episodes, self.ticks)
     }
 
+    /// Plays pass drills in the last `drills.matches` matches (`None`: none);
+    /// every match starts its current episode afresh. See [`PassDrills`].
+    pub fn set_pass_drills(&mut self, drills: Option<PassDrills>) -> Result<(), LearnError> {
+        if let Some(d) = drills {
+            let total = naosoccer_referee::Match::new(&self.cfg, 0)?.total_ticks();
+            if d.matches == 0 || d.matches > self.slots.len() {
+                return Err(LearnError::Config(format!(
+                    "pass drills in {} matches: between 1 and the {} matches played",
+                    d.matches,
+                    self.slots.len()
+                )));
+            }
+            if d.ticks == 0 || total % d.ticks != 0 {
+                return Err(LearnError::Config(format!(
+                    "a pass drill of {} ticks must divide the match's {total} ticks",
+                    d.ticks
+                )));
+            }
+            if self.slots.iter().any(|s| s.drill.is_some()) {
+                return Err(LearnError::Config(
+                    "pass drills mix into matches, not into drills".into(),
+                ));
+            }
+        }
+        let n = self.slots.len();
+        for (i, slot) in self.slots.iter_mut().enumerate() {
+            slot.pass_drill = drills.filter(|d| i >= n - d.matches).map(|d| d.ticks);
+        }
+        let episodes = self.episodes();
+        self.restart_at(&episodes, self.ticks)
+    }
+
     /// Starts every match afresh at episode `episodes[i]` (as if that many
     /// had finished), the tick counter at `ticks`: where a resumed run picks
     /// up, at an episode boundary.
@@ -362,6 +455,7 @@ impl VecEnv {
             slot.episode = e;
             slot.m = Match::new(&self.cfg, episode_seed(self.env.seed, slot.index, e))?;
             slot.place_drill(&self.env);
+            slot.place_pass_drill(&self.env);
             slot.returns = vec![0.0; l];
             slot.finished = None;
             slot.build_policies(&self.env, &self.mix);
@@ -425,9 +519,14 @@ impl VecEnv {
             .zip(self.feats.chunks_mut(per * l * OBS_DIM))
             .zip(self.rewards.chunks_mut(per * l))
             .zip(self.dones.chunks_mut(per * l))
+            .zip(
+                self.truncated
+                    .chunks_mut(per * l)
+                    .zip(self.final_feats.chunks_mut(per * l * OBS_DIM)),
+            )
             .enumerate();
         let results: Vec<Result<(), LearnError>> = if threads == 1 {
-            work.map(|(c, ((((slots, a), f), r), d))| {
+            work.map(|(c, (((((slots, a), f), r), d), cut))| {
                 step_chunk(
                     cfg,
                     env,
@@ -439,15 +538,18 @@ impl VecEnv {
                     f,
                     r,
                     d,
+                    cut,
                 )
             })
             .collect()
         } else {
             std::thread::scope(|s| {
                 let handles: Vec<_> = work
-                    .map(|(c, ((((slots, a), f), r), d))| {
+                    .map(|(c, (((((slots, a), f), r), d), cut))| {
                         let opp = opp_chunk(opp_actions, c, per);
-                        s.spawn(move || step_chunk(cfg, env, scale, mix, slots, a, opp, f, r, d))
+                        s.spawn(move || {
+                            step_chunk(cfg, env, scale, mix, slots, a, opp, f, r, d, cut)
+                        })
                     })
                     .collect();
                 handles
@@ -486,6 +588,7 @@ fn step_chunk(
     feats: &mut [f32],
     rewards: &mut [f32],
     dones: &mut [bool],
+    (truncated, final_feats): (&mut [bool], &mut [f32]),
 ) -> Result<(), LearnError> {
     let l = env.learners.len();
     for (j, slot) in slots.iter_mut().enumerate() {
@@ -500,6 +603,15 @@ fn step_chunk(
             &mut rewards[j * l..(j + 1) * l],
         );
         dones[j * l..(j + 1) * l].fill(done);
+        let cut = done && !slot.m.is_finished();
+        truncated[j * l..(j + 1) * l].fill(cut);
+        if cut {
+            slot.encode_learners(
+                &env.learners,
+                scale,
+                &mut final_feats[j * l * OBS_DIM..(j + 1) * l * OBS_DIM],
+            );
+        }
         if done {
             slot.restart(cfg, env, mix)?;
         }
@@ -581,7 +693,9 @@ impl Slot {
             rewards[k] = r;
             self.returns[k] += r;
         }
-        self.m.is_finished() || (self.drill.is_some() && self.m.score() != score)
+        self.m.is_finished()
+            || (self.drill.is_some() && self.m.score() != score)
+            || self.pass_drill.is_some_and(|t| self.m.tick().get() >= t)
     }
 
     fn restart(&mut self, cfg: &MatchConfig, env: &EnvConfig, mix: &Mix) -> Result<(), LearnError> {
@@ -591,21 +705,115 @@ impl Slot {
         } else {
             (red, blue)
         };
-        self.finished = Some(Episode {
+        let returns = std::mem::replace(&mut self.returns, vec![0.0; env.learners.len()]);
+        self.finished = self.pass_drill.is_none().then(|| Episode {
             match_index: self.index,
             learner_team: self.team,
             goals_for: gf,
             goals_against: ga,
-            returns: std::mem::replace(&mut self.returns, vec![0.0; env.learners.len()]),
+            returns,
             stats: self.m.stats(),
             ticks: self.m.tick().get(),
         });
         self.episode += 1;
         self.m = Match::new(cfg, episode_seed(env.seed, self.index, self.episode))?;
         self.place_drill(env);
+        self.place_pass_drill(env);
         self.build_policies(env, mix);
         self.observe_all();
         Ok(())
+    }
+
+    /// Stages a pass drill episode (see [`PassDrills`]), placed from the
+    /// episode's seed.
+    fn place_pass_drill(&mut self, env: &EnvConfig) {
+        if self.pass_drill.is_none() {
+            return;
+        }
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(episode_seed(
+            env.seed ^ 0x9A55_D111_1D00,
+            self.index,
+            self.episode,
+        ));
+        let half_x = self.m.config().sim.field_length * 0.5;
+        let half_y = self.m.config().sim.field_width * 0.5;
+        // Kicker and receiver: two own players, learners first.
+        let mut own: Vec<usize> = (0..PLAYERS_PER_TEAM).collect();
+        own.sort_by_key(|p| !env.learners.contains(p));
+        let learners = env.learners.len().max(1);
+        let kicker = own[rng.random_range(0..learners)];
+        own.retain(|&p| p != kicker);
+        let receiver = own.remove(rng.random_range(0..own.len().min(learners.max(2) - 1)));
+        // Ball, kicker heading and receiver, drawn until the receiver stands
+        // inside the field (0.3 m from the lines).
+        let (mut ball, mut heading, mut recv) = ((0.0, 0.0), 0.0f32, (0.0, 0.0, 0.0));
+        for _ in 0..32 {
+            ball = (
+                rng.random_range(-2.0..=1.5f32),
+                rng.random_range(-1.6..=1.6f32),
+            );
+            heading = rng.random_range(-PassDrills::HEADING..=PassDrills::HEADING);
+            let d = rng.random_range(PassDrills::RECEIVER.0..=PassDrills::RECEIVER.1);
+            let a = heading + rng.random_range(-PassDrills::LANE_ANGLE..=PassDrills::LANE_ANGLE);
+            let (x, y) = (ball.0 + d * a.cos(), ball.1 + d * a.sin());
+            recv = (x, y, a + std::f32::consts::PI);
+            if x.abs() <= half_x - 0.3 && y.abs() <= half_y - 0.3 {
+                break;
+            }
+        }
+        recv.0 = recv.0.clamp(-half_x + 0.3, half_x - 0.3);
+        recv.1 = recv.1.clamp(-half_y + 0.3, half_y - 0.3);
+        let k = PassDrills::KICKER_DISTANCE;
+        let mut spots = [(0.0f32, 0.0f32, 0.0f32); ROBOTS];
+        let base = self.team.index() * PLAYERS_PER_TEAM;
+        let foe = self.team.other().index() * PLAYERS_PER_TEAM;
+        spots[base + kicker] = (
+            ball.0 - k * heading.cos(),
+            ball.1 - k * heading.sin(),
+            heading,
+        );
+        spots[base + receiver] = recv;
+        let facing = |x: f32, y: f32| (ball.1 - y).atan2(ball.0 - x);
+        // A spot at least `min` from the ball (and `lane` from the line ball
+        // to receiver), drawn in the x range given.
+        let draw = |rng: &mut rand_chacha::ChaCha8Rng, xs: (f32, f32), min: f32, lane: f32| {
+            let mut p = (0.0, 0.0);
+            for _ in 0..32 {
+                p = (
+                    rng.random_range(xs.0..=xs.1),
+                    rng.random_range(-(half_y - 0.45)..=(half_y - 0.45)),
+                );
+                let far = (p.0 - ball.0).hypot(p.1 - ball.1) >= min;
+                if far && segment_distance(p, ball, (recv.0, recv.1)) >= lane {
+                    break;
+                }
+            }
+            (p.0, p.1, facing(p.0, p.1))
+        };
+        for &p in &own {
+            spots[base + p] = draw(&mut rng, (-(half_x - 0.4), half_x - 0.4), 1.0, 0.0);
+        }
+        spots[foe] = (
+            half_x - 0.4,
+            rng.random_range(-0.5..=0.5f32),
+            std::f32::consts::PI,
+        );
+        for p in 1..PLAYERS_PER_TEAM {
+            spots[foe + p] = draw(&mut rng, (-2.0, half_x - 0.4), 1.2, 0.5);
+        }
+        // The learner's frame to the world's: red sees the world turned
+        // half round.
+        let (sign, turn) = if self.team == Team::Blue {
+            (1.0, 0.0)
+        } else {
+            (-1.0, std::f32::consts::PI)
+        };
+        let world = spots.map(|(x, y, h)| (sign * x, sign * y, h + turn));
+        self.m
+            .sim_mut()
+            .place_all((sign * ball.0, sign * ball.1), &world);
+        self.m.clear_set_play();
     }
 
     /// Sets up a drill episode (see [`Drill`]), placed from the episode's
@@ -654,4 +862,16 @@ impl Slot {
             }
         }
     }
+}
+
+/// Distance from `p` to the segment from `a` to `b`.
+fn segment_distance(p: (f32, f32), a: (f32, f32), b: (f32, f32)) -> f32 {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 {
+        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p.0 - a.0 - t * dx).hypot(p.1 - a.1 - t * dy)
 }

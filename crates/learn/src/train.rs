@@ -293,6 +293,15 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
     if cfg.drill.is_some() {
         env.set_drill(cfg.drill)?;
     }
+    if cfg.pass_drills.is_some() {
+        if !matches!(cfg.algo, Algo::Ppo) || cfg.ppo.decision.is_none() {
+            return Err(LearnError::Config(
+                "pass drills need the PPO team preset (its loop bootstraps a drill's cut end)"
+                    .into(),
+            ));
+        }
+        env.set_pass_drills(cfg.pass_drills)?;
+    }
     Ok(env)
 }
 
@@ -522,6 +531,7 @@ fn train_ppo_decisions(
     let (mut dec_rows, mut dec_obs, mut dec_cobs, mut dec_ok) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut cut_rows, mut cut_cobs, mut cut_val) = (Vec::new(), Vec::new(), Vec::new());
     let mut out_rows = Vec::new();
     let mut last_checkpoint = transitions;
     while transitions < cfg.steps {
@@ -582,6 +592,28 @@ fn train_ppo_decisions(
                 actions[r] = dec_act[j];
             }
             let finished = env.step(&actions)?;
+            // Episodes cut short (pass drills) are bootstrapped with the
+            // critic's value of the state where they were cut.
+            cut_rows.clear();
+            cut_cobs.clear();
+            for r in 0..rows {
+                if env.truncated()[r] {
+                    cut_rows.push(r);
+                    push_critic_row(
+                        env.final_observations(),
+                        l,
+                        r,
+                        scale.dim(),
+                        cw,
+                        &mut cut_cobs,
+                    );
+                }
+            }
+            cut_val.resize(cut_rows.len(), 0.0);
+            if !cut_rows.is_empty() {
+                ppo.critic_values(&cut_cobs, &mut cut_val);
+            }
+            let mut cut = cut_rows.iter().zip(&cut_val).peekable();
             for (r, p) in pend.iter_mut().enumerate() {
                 if p.open {
                     p.reward += p.discount * env.rewards()[r];
@@ -589,14 +621,17 @@ fn train_ppo_decisions(
                     p.elapsed += 1;
                 }
                 if env.dones()[r] {
+                    let bootstrap = cut.next_if(|(&c, _)| c == r).map(|(_, &v)| v);
                     close_pending(
                         &mut tr,
                         p,
                         &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
                         &pend_cobs[r * cw..(r + 1) * cw],
-                        0.0,
-                        true,
+                        bootstrap.unwrap_or(0.0),
+                        bootstrap.is_none(),
                     );
+                    // A cut stream does not go on into the next episode.
+                    p.prev = None;
                     holds[r].reset();
                 }
             }

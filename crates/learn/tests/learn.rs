@@ -577,6 +577,25 @@ fn team_policies_decide_alike_however_they_are_asked() {
 /// matches, the schedule's stage and the pool all have to come back).
 #[test]
 fn a_resumed_run_writes_what_an_uninterrupted_one_does() {
+    resume_matches_an_uninterrupted_run(None, "resume");
+}
+
+/// The same with pass drills in two of the four matches (20-tick drills in
+/// the 60-tick matches): cut episodes and their bootstraps resume bit for
+/// bit too.
+#[test]
+fn a_resumed_run_with_pass_drills_writes_what_an_uninterrupted_one_does() {
+    let drills = naosoccer_learn::env::PassDrills {
+        matches: 2,
+        ticks: 20,
+    };
+    resume_matches_an_uninterrupted_run(Some(drills), "resume_drills");
+}
+
+fn resume_matches_an_uninterrupted_run(
+    drills: Option<naosoccer_learn::env::PassDrills>,
+    name: &str,
+) {
     use naosoccer_learn::ppo::PpoConfig;
     use naosoccer_learn::schedule::Schedule;
 
@@ -593,12 +612,13 @@ fn a_resumed_run_writes_what_an_uninterrupted_one_does() {
     let mut sched = Schedule::parse("idle@2000,random+pool").unwrap();
     sched.pool_every = 1500;
     cfg.opponent = OpponentSpec::Schedule(sched);
+    cfg.pass_drills = drills;
 
-    let whole = out_dir("resume_whole");
+    let whole = out_dir(&format!("{name}_whole"));
     tch::manual_seed(cfg.seed as i64);
     train(&cfg, &whole, &mut |_| {}).unwrap();
 
-    let split = out_dir("resume_split");
+    let split = out_dir(&format!("{name}_split"));
     // Killed while writing its 8th row (the 6th closed the third episode
     // and checkpointed).
     let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
@@ -622,6 +642,21 @@ fn a_resumed_run_writes_what_an_uninterrupted_one_does() {
     let b = std::fs::read_to_string(split.join("metrics.csv")).unwrap();
     assert_eq!(a, b, "resumed metrics differ");
     assert!(a.lines().count() >= 12, "{a}");
+    // Six episodes of each whole match were reported; drill matches report none.
+    let episodes: u64 = a
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .nth(3)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(
+        episodes,
+        6 * (4 - drills.map_or(0, |d| d.matches) as u64),
+        "{a}"
+    );
     let wa = std::fs::read(whole.join("final.safetensors")).unwrap();
     let wb = std::fs::read(split.join("final.safetensors")).unwrap();
     assert!(wa == wb, "resumed final weights differ");
@@ -930,4 +965,108 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
             "{spec}: outputs differ from tch's by {worst}"
         );
     }
+}
+
+/// Pass drills (`--pass-drills`): the last matches of the batch play short
+/// episodes staged as a pass: a learner with the ball in kick reach, a
+/// teammate ahead in its line facing the ball, the opponents (playing the
+/// scripted team) away from ball and lane, no set play. The episodes are cut
+/// (truncated, their final observations kept for the bootstrap) every drill
+/// length, are not reported as finished matches, and every match still ends
+/// together at a match's end. A drill that does not divide the match, or
+/// more drill matches than matches, is refused.
+#[test]
+fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
+    use naosoccer_learn::env::PassDrills;
+    use naosoccer_policy::obs::ObsScale;
+
+    let cfg = MatchConfig {
+        minutes: 1.0,
+        ..MatchConfig::default()
+    };
+    let scale = ObsScale::from_config(&cfg);
+    let mut env = VecEnv::new(
+        &cfg,
+        EnvConfig {
+            matches: 4,
+            learners: vec![0, 1, 2, 3],
+            teammates: PolicyKind::Idle,
+            threads: 2,
+            seed: 3,
+        },
+        Opponent::Builtin(PolicyKind::Scripted),
+    )
+    .unwrap();
+    for bad in [
+        PassDrills {
+            matches: 2,
+            ticks: 70,
+        },
+        PassDrills {
+            matches: 5,
+            ticks: 60,
+        },
+        PassDrills {
+            matches: 0,
+            ticks: 60,
+        },
+    ] {
+        assert!(env.set_pass_drills(Some(bad)).is_err(), "{bad:?}");
+    }
+    env.set_pass_drills(Some(PassDrills {
+        matches: 2,
+        ticks: 60,
+    }))
+    .unwrap();
+    let rows = env.rows();
+    let drill_row = |r: usize| r >= rows / 2;
+    let mut staged = 0;
+    let mut check_start = |env: &VecEnv| {
+        for m in 2..4 {
+            let obs: Vec<_> = (0..4).map(|p| env.learner_observation(m * 4 + p)).collect();
+            let o = obs[0];
+            assert_eq!(o.tick, Tick::ZERO);
+            assert!(o.set_play.is_none(), "{:?}", o.set_play);
+            let kickers: Vec<usize> = (0..4).filter(|&p| scale.kick.in_reach(obs[p])).collect();
+            assert_eq!(kickers.len(), 1, "one kicker: {kickers:?}");
+            let k = o.own[kickers[0]];
+            let (bx, by) = (o.ball.x, o.ball.y);
+            let receivers = (0..4).filter(|&p| {
+                let r = o.own[p];
+                let d = (r.x - bx).hypot(r.y - by);
+                let off = ((r.y - by).atan2(r.x - bx) - k.heading + std::f32::consts::PI)
+                    .rem_euclid(std::f32::consts::TAU)
+                    - std::f32::consts::PI;
+                (1.1..=2.6).contains(&d) && off.abs() < 0.3
+            });
+            assert!(receivers.count() >= 1, "a teammate in the kicker's line");
+            assert!(k.heading.abs() <= std::f32::consts::FRAC_PI_3 + 0.01);
+            for r in &o.opponents[1..] {
+                assert!((r.x - bx).hypot(r.y - by) >= 1.1, "opponent near the ball");
+            }
+            staged += 1;
+        }
+    };
+    check_start(&env);
+    let actions = vec![0usize; rows];
+    let mut reported = 0;
+    for t in 1..=600u64 {
+        reported += env.step(&actions).unwrap().len();
+        for r in 0..rows {
+            let cut = t % 60 == 0 && drill_row(r);
+            let end = t == 600;
+            assert_eq!(env.dones()[r], cut || end, "row {r} tick {t}");
+            assert_eq!(env.truncated()[r], cut, "row {r} tick {t}");
+        }
+        if t % 60 == 0 {
+            // The cut state is kept: its clock still runs (a whole minute's
+            // match, 60 ticks of it played).
+            let f = &env.final_observations()[(rows - 1) * OBS_DIM..rows * OBS_DIM];
+            assert!(f.iter().all(|v| v.is_finite()));
+            check_start(&env);
+        }
+    }
+    // The two whole matches ended; the drills' 20 episodes are not reported.
+    assert_eq!(reported, 2);
+    assert_eq!(staged, 2 * 11);
 }

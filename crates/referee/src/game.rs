@@ -523,6 +523,13 @@ impl Match {
         &mut self.sim
     }
 
+    /// For staged situations (training drills, tests) placed with
+    /// [`Match::sim_mut`]: forgets the set play in progress (at the start,
+    /// the first kick-off), so nobody is held back from the staged ball.
+    pub fn clear_set_play(&mut self) {
+        self.set_play.clear();
+    }
+
     /// Who controls the ball (the paper's `if_c`), as of the last tick.
     pub fn controller(&self) -> Option<RobotId> {
         self.controller
