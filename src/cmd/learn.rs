@@ -122,6 +122,11 @@ pub struct TrainArgs {
     /// match's length.
     #[arg(long, default_value_t = 30.0, requires = "pass_drills")]
     pass_drill_seconds: f32,
+    /// The pass drill receiver's largest angle off the kicker's heading,
+    /// degrees (0-90; default 8.6, 0.15 rad: in its line). Wider, the kicker
+    /// must turn with the ball to pass.
+    #[arg(long, value_name = "DEG", requires = "pass_drills")]
+    pass_drill_angle: Option<f32>,
     /// Observation layout version: 2 (the default), 3 (version 2 plus the
     /// pass picture: teammates seen from the robot, whether they face the
     /// ball, how clear the lane to them is) or 1 (the shipped paper-era
@@ -271,6 +276,10 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         cfg.pass_drills = Some(naosoccer_learn::env::PassDrills {
             matches: n,
             ticks: ticks.round() as u64,
+            angle: a.pass_drill_angle.map_or(
+                naosoccer_learn::env::PassDrills::LANE_ANGLE,
+                f32::to_radians,
+            ),
         });
     }
     if let Some(e) = a.epsilon {

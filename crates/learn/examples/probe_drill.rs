@@ -6,7 +6,10 @@
 //! nobody controlled it); and how often the kicker's first decision was to
 //! shoot.
 //!
-//! `cargo run --release -p naosoccer-learn --example probe_drill -- ppo:DIR [OPPONENT] [DRILLS] [SEED]`
+//! ANGLE (degrees) places the receiver up to that far off the kicker's
+//! heading (default: in its line, `PassDrills::LANE_ANGLE`).
+//!
+//! `cargo run --release -p naosoccer-learn --example probe_drill -- ppo:DIR [OPPONENT] [DRILLS] [SEED] [ANGLE]`
 
 use naosoccer_client::policy::PolicyKind;
 use naosoccer_learn::env::{EnvConfig, Opponent, PassDrills, VecEnv};
@@ -27,7 +30,7 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let spec = args
         .first()
-        .expect("usage: probe_drill ppo:DIR [OPPONENT] [DRILLS] [SEED]");
+        .expect("usage: probe_drill ppo:DIR [OPPONENT] [DRILLS] [SEED] [ANGLE]");
     let opponent: PolicyKind = args
         .get(1)
         .map_or("scripted", String::as_str)
@@ -35,6 +38,9 @@ fn main() {
         .expect("opponent: a built-in team");
     let drills: usize = args.get(2).map_or(400, |s| s.parse().expect("DRILLS"));
     let seed: u64 = args.get(3).map_or(11, |s| s.parse().expect("SEED"));
+    let angle: f32 = args.get(4).map_or(PassDrills::LANE_ANGLE, |s| {
+        s.parse::<f32>().expect("ANGLE, degrees").to_radians()
+    });
     let cfg = MatchConfig::default();
     let scale = ObsScale::from_config(&cfg);
     let matches = 16;
@@ -53,6 +59,7 @@ fn main() {
     env.set_pass_drills(Some(PassDrills {
         matches,
         ticks: 100,
+        angle,
     }))
     .expect("drills");
     let mut team = LearnedPolicy::load(spec).expect("team");
@@ -75,7 +82,7 @@ fn main() {
             let off = ((r.y - by).atan2(r.x - bx) - me.heading + std::f32::consts::PI)
                 .rem_euclid(std::f32::consts::TAU)
                 - std::f32::consts::PI;
-            (1.0..=2.7).contains(&d) && off.abs() < 0.3
+            (1.0..=2.7).contains(&d) && off.abs() < angle + 0.15
         });
         (k, recv, None, false)
     };

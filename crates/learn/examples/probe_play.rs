@@ -121,6 +121,31 @@ fn mate_cones(o: &Observation) -> [bool; 3] {
     hit
 }
 
+/// Bearing bins (degrees off the heading, either side) and distance bins
+/// (metres) of the teammates around a robot with the ball in reach.
+const BEARINGS: [f32; 5] = [15.0, 45.0, 90.0, 135.0, 180.0];
+const DISTANCES: [f32; 4] = [1.0, 2.0, 4.0, f32::INFINITY];
+
+/// For the robot that received `o` with the ball in reach: adds each
+/// standing teammate to its (bearing, distance) bin.
+fn mate_bins(o: &Observation, bins: &mut [[u64; DISTANCES.len()]; BEARINGS.len()]) {
+    let me = o.me();
+    let (s, c) = me.heading.sin_cos();
+    let mine = o.player.index();
+    for (p, m) in o.own.iter().enumerate() {
+        if p == mine || m.fallen {
+            continue;
+        }
+        let (dx, dy) = (m.x - me.x, m.y - me.y);
+        let (ahead, side) = (c * dx + s * dy, -s * dx + c * dy);
+        let bearing = side.atan2(ahead).abs().to_degrees();
+        let d = ahead.hypot(side);
+        let b = BEARINGS.iter().position(|&l| bearing <= l).unwrap_or(4);
+        let k = DISTANCES.iter().position(|&l| d <= l).unwrap_or(3);
+        bins[b][k] += 1;
+    }
+}
+
 /// The ticks counted in `row` and each action's share of them, as text.
 fn action_shares(row: &[u64; NAMES.len()]) -> (u64, String) {
     let n: u64 = row.iter().sum();
@@ -160,6 +185,7 @@ fn main() {
     // Ball in kick reach with a teammate open where the kick would go.
     let mut pass_counts = [0u64; NAMES.len()];
     let (mut reach_ticks, mut cone_ticks) = (0u64, [0u64; 3]);
+    let mut bins = [[0u64; DISTANCES.len()]; BEARINGS.len()];
     // What became of blue's kicks: the first of a pass, the kicker's own
     // control again, an opponent's control, a goal, the ball out.
     let mut kick_outcomes = [0u64; OUTCOMES.len()];
@@ -222,6 +248,7 @@ fn main() {
                         for (t, h) in cone_ticks.iter_mut().zip(mate_cones(o)) {
                             *t += u64::from(h);
                         }
+                        mate_bins(o, &mut bins);
                     }
                 }
             }
@@ -321,4 +348,18 @@ fn main() {
         share(1),
         share(2)
     );
+    let total: u64 = bins.iter().flatten().sum();
+    println!(
+        "  where the standing teammates are then (share of {total} teammate-ticks), by degrees off \
+         the heading (rows) and metres away (columns <=1, 1-2, 2-4, >4):"
+    );
+    let mut lo = 0.0;
+    for (b, row) in BEARINGS.iter().zip(bins) {
+        let cells: Vec<String> = row
+            .iter()
+            .map(|&c| format!("{:.2}", c as f64 / total.max(1) as f64))
+            .collect();
+        println!("    {lo:>3}-{b:<3} deg: {}", cells.join("  "));
+        lo = *b;
+    }
 }

@@ -75,9 +75,8 @@ struct Slot {
     /// Index of this episode's opponent.
     opp: usize,
     drill: Option<Drill>,
-    /// This match plays pass drills of this many control ticks (see
-    /// [`PassDrills`]).
-    pass_drill: Option<u64>,
+    /// This match plays these pass drills.
+    pass_drill: Option<PassDrills>,
 }
 
 /// Pass drills mixed into a run's matches: the last `matches` of the
@@ -87,8 +86,10 @@ struct Slot {
 /// In the learner's frame (attacking +x): the ball at a random spot
 /// (x in -2..1.5, |y| <= 1.6), a learning robot 0.2 m behind it with the
 /// ball straight ahead, facing within 60 degrees of the opponent goal;
-/// a teammate 1.2-2.5 m further on, within 0.15 rad (9 degrees) of the
-/// kicker's heading, facing the ball; the other teammates anywhere in the
+/// a teammate 1.2-2.5 m further on, within `angle` of the kicker's heading
+/// (0.15 rad, 9 degrees, by default: in its line) and ahead of the ball
+/// (toward the opponent goal, so that a pass to it is paid), facing the
+/// ball; the other teammates anywhere in the
 /// field at least 1 m from the ball; the opponent keeper before its goal
 /// and the other opponents at least 1.2 m from the ball and 0.5 m from the
 /// line from ball to receiver, facing the ball. The match then plays on
@@ -100,10 +101,15 @@ struct Slot {
 /// `ticks` must divide a match's length, so that every match still ends
 /// together at a match's end (a checkpoint's boundary). Drill episodes are
 /// not reported among finished episodes (goals, returns).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PassDrills {
     pub matches: usize,
     pub ticks: u64,
+    /// The receiver's largest angle off the kicker's heading, radians:
+    /// small, it stands in the kicker's line; wide, the kicker must turn
+    /// with the ball to pass.
+    #[serde(default = "PassDrills::default_angle")]
+    pub angle: f32,
 }
 
 impl PassDrills {
@@ -111,8 +117,13 @@ impl PassDrills {
     pub const KICKER_DISTANCE: f32 = 0.2;
     /// The receiver's distance from the ball, metres.
     pub const RECEIVER: (f32, f32) = (1.2, 2.5);
-    /// The receiver's largest angle off the kicker's heading, radians.
+    /// The receiver's largest angle off the kicker's heading by default,
+    /// radians.
     pub const LANE_ANGLE: f32 = 0.15;
+
+    fn default_angle() -> f32 {
+        Self::LANE_ANGLE
+    }
     /// The kicker's largest heading off +x, radians (60 degrees).
     pub const HEADING: f32 = std::f32::consts::FRAC_PI_3;
 }
@@ -425,6 +436,12 @@ impl VecEnv {
                     d.ticks
                 )));
             }
+            if !(0.0..=std::f32::consts::FRAC_PI_2).contains(&d.angle) {
+                return Err(LearnError::Config(format!(
+                    "a pass drill's receiver angle of {} rad: between 0 and pi/2",
+                    d.angle
+                )));
+            }
             if self.slots.iter().any(|s| s.drill.is_some()) {
                 return Err(LearnError::Config(
                     "pass drills mix into matches, not into drills".into(),
@@ -433,7 +450,7 @@ impl VecEnv {
         }
         let n = self.slots.len();
         for (i, slot) in self.slots.iter_mut().enumerate() {
-            slot.pass_drill = drills.filter(|d| i >= n - d.matches).map(|d| d.ticks);
+            slot.pass_drill = drills.filter(|d| i >= n - d.matches);
         }
         let episodes = self.episodes();
         self.restart_at(&episodes, self.ticks)
@@ -695,7 +712,9 @@ impl Slot {
         }
         self.m.is_finished()
             || (self.drill.is_some() && self.m.score() != score)
-            || self.pass_drill.is_some_and(|t| self.m.tick().get() >= t)
+            || self
+                .pass_drill
+                .is_some_and(|d| self.m.tick().get() >= d.ticks)
     }
 
     fn restart(&mut self, cfg: &MatchConfig, env: &EnvConfig, mix: &Mix) -> Result<(), LearnError> {
@@ -727,9 +746,9 @@ impl Slot {
     /// Stages a pass drill episode (see [`PassDrills`]), placed from the
     /// episode's seed.
     fn place_pass_drill(&mut self, env: &EnvConfig) {
-        if self.pass_drill.is_none() {
+        let Some(drill) = self.pass_drill else {
             return;
-        }
+        };
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(episode_seed(
             env.seed ^ 0x9A55_D111_1D00,
@@ -755,10 +774,10 @@ impl Slot {
             );
             heading = rng.random_range(-PassDrills::HEADING..=PassDrills::HEADING);
             let d = rng.random_range(PassDrills::RECEIVER.0..=PassDrills::RECEIVER.1);
-            let a = heading + rng.random_range(-PassDrills::LANE_ANGLE..=PassDrills::LANE_ANGLE);
+            let a = heading + rng.random_range(-drill.angle..=drill.angle);
             let (x, y) = (ball.0 + d * a.cos(), ball.1 + d * a.sin());
             recv = (x, y, a + std::f32::consts::PI);
-            if x.abs() <= half_x - 0.3 && y.abs() <= half_y - 0.3 {
+            if x.abs() <= half_x - 0.3 && y.abs() <= half_y - 0.3 && x - ball.0 >= 0.3 {
                 break;
             }
         }

@@ -588,6 +588,7 @@ fn a_resumed_run_with_pass_drills_writes_what_an_uninterrupted_one_does() {
     let drills = naosoccer_learn::env::PassDrills {
         matches: 2,
         ticks: 20,
+        angle: 1.0,
     };
     resume_matches_an_uninterrupted_run(Some(drills), "resume_drills");
 }
@@ -973,8 +974,9 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
 /// scripted team) away from ball and lane, no set play. The episodes are cut
 /// (truncated, their final observations kept for the bootstrap) every drill
 /// length, are not reported as finished matches, and every match still ends
-/// together at a match's end. A drill that does not divide the match, or
-/// more drill matches than matches, is refused.
+/// together at a match's end. A drill that does not divide the match, more
+/// drill matches than matches, or a receiver angle past 90 degrees is
+/// refused.
 #[test]
 fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
     use naosoccer_learn::env::PassDrills;
@@ -1001,14 +1003,22 @@ fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
         PassDrills {
             matches: 2,
             ticks: 70,
+            angle: PassDrills::LANE_ANGLE,
         },
         PassDrills {
             matches: 5,
             ticks: 60,
+            angle: PassDrills::LANE_ANGLE,
         },
         PassDrills {
             matches: 0,
             ticks: 60,
+            angle: PassDrills::LANE_ANGLE,
+        },
+        PassDrills {
+            matches: 2,
+            ticks: 60,
+            angle: 2.0,
         },
     ] {
         assert!(env.set_pass_drills(Some(bad)).is_err(), "{bad:?}");
@@ -1016,6 +1026,7 @@ fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
     env.set_pass_drills(Some(PassDrills {
         matches: 2,
         ticks: 60,
+        angle: PassDrills::LANE_ANGLE,
     }))
     .unwrap();
     let rows = env.rows();

@@ -188,6 +188,26 @@ pub struct RewardConfig {
     /// the ball to the receiver. A kick at a teammate behind an opponent is
     /// a ball handed over. 0 (no lane check) by default.
     pub aim_lane: f32,
+    /// Ours: charged (outside the log) every tick to a standing robot
+    /// within `crowd_radius` metres of a standing teammate nearer the ball
+    /// (the nearer on a tie: the lower player number). A team that swarms
+    /// the ball has nobody to pass to; the team's chaser is never charged.
+    /// Unlike the shaping terms this changes which policies are best. 0
+    /// (off) by default. Left out of the configuration's JSON form while
+    /// off (and the radius while 1 m), so configurations from before it
+    /// keep their hash.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub crowd: f32,
+    #[serde(skip_serializing_if = "is_one")]
+    pub crowd_radius: f32,
+}
+
+fn is_zero(v: &f32) -> bool {
+    *v == 0.0
+}
+
+fn is_one(v: &f32) -> bool {
+    *v == 1.0
 }
 
 impl Default for RewardConfig {
@@ -211,6 +231,8 @@ impl Default for RewardConfig {
             aim_angle: 0.26,
             aim_range: 4.0,
             aim_lane: 0.0,
+            crowd: 0.0,
+            crowd_radius: 1.0,
         }
     }
 }
@@ -360,10 +382,12 @@ impl MatchConfig {
             ("reward.aim_angle", w.aim_angle),
             ("reward.aim_range", w.aim_range),
             ("reward.aim_lane", w.aim_lane),
+            ("reward.crowd", w.crowd),
         ] {
             non_negative(field, v)?;
         }
         positive("reward.close_scale", w.close_scale)?;
+        positive("reward.crowd_radius", w.crowd_radius)?;
         if !(w.shaping_gamma.is_finite() && w.shaping_gamma > 0.0 && w.shaping_gamma <= 1.0) {
             return Err(ConfigError::Invalid {
                 field: "reward.shaping_gamma",

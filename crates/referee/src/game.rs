@@ -219,6 +219,9 @@ impl Match {
                 *s += self.cfg.reward.aim;
             }
         }
+        if self.cfg.reward.crowd > 0.0 {
+            self.charge_crowding();
+        }
         self.run_rules(tick);
         self.apply_commands(tick);
         for e in &self.outcome.events {
@@ -275,6 +278,35 @@ impl Match {
             let spot_y = (by + side * w.support_side).clamp(-ly, ly);
             progress - w.support * (spot_x - r.pos[0]).hypot(spot_y - r.pos[1])
         })
+    }
+
+    /// `RewardConfig::crowd`: charges each standing robot within
+    /// `crowd_radius` of a standing teammate nearer the ball, in the state
+    /// the tick's physics reached (before any restart).
+    fn charge_crowding(&mut self) {
+        let w = &self.cfg.reward;
+        let snap = self.sim.snapshot();
+        let down = self.fall.down();
+        let [bx, by, _] = snap.ball.pos;
+        let dist: [f32; ROBOTS] = std::array::from_fn(|i| {
+            let r = &snap.robots[i];
+            (bx - r.pos[0]).hypot(by - r.pos[1])
+        });
+        for i in 0..ROBOTS {
+            if down[i] {
+                continue;
+            }
+            let team = i / PLAYERS_PER_TEAM;
+            let [x, y, _] = snap.robots[i].pos;
+            let crowded = (team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM).any(|j| {
+                let nearer = dist[j] < dist[i] || (dist[j] == dist[i] && j < i);
+                let [xj, yj, _] = snap.robots[j].pos;
+                j != i && !down[j] && nearer && (xj - x).hypot(yj - y) < w.crowd_radius
+            });
+            if crowded {
+                self.shaping[i] -= w.crowd;
+            }
+        }
     }
 
     fn run_rules(&mut self, tick: Tick) {

@@ -1029,3 +1029,48 @@ fn aim_bonus_pays_a_kick_at_a_teammate_ahead_only() {
         "opponent beyond the receiver"
     );
 }
+
+/// `reward.crowd`: every tick, a standing robot within `crowd_radius` of a
+/// standing teammate nearer the ball is charged `crowd`; the team's chaser
+/// never is, nor a robot whose only close teammates are farther from the
+/// ball, nor anybody while the term is off. Off, the configuration's JSON
+/// form has no crowd fields (older configurations keep their hash).
+#[test]
+fn crowd_charges_a_robot_next_to_a_teammate_nearer_the_ball() {
+    let text = serde_json::to_string(&MatchConfig::default()).unwrap();
+    assert!(!text.contains("crowd"), "{text}");
+    let rewards_with = |crowd: f32| {
+        let mut cfg = MatchConfig::default();
+        shaping_only(&mut cfg);
+        cfg.reward.close = 0.0;
+        cfg.reward.crowd = crowd;
+        cfg.reward.crowd_radius = 0.8;
+        let mut m = Match::new(&cfg, 4).unwrap();
+        clear_the_pitch(&mut m);
+        m.sim_mut().place_ball(0.5, 0.0);
+        // Blue: 1 the chaser; 2 is 0.6 m from it (charged); 3 is 0.6 m from
+        // 2 but 1.2 m from 1, and farther from the ball than both (charged,
+        // for 2); 0 far away.
+        m.sim_mut().place_robot(0, -2.5, 0.2, 0.0);
+        m.sim_mut().place_robot(1, 0.2, 0.0, 0.0);
+        m.sim_mut().place_robot(2, 0.2, 0.6, 0.0);
+        m.sim_mut().place_robot(3, 0.2, 1.2, 0.0);
+        // Red: its chaser 7 near blue's robots (other teams do not count),
+        // the others more than 0.8 m from each other.
+        m.sim_mut().place_robot(7, 0.9, 0.3, std::f32::consts::PI);
+        m.sim_mut().place_robot(6, 2.0, -1.0, std::f32::consts::PI);
+        m.sim_mut().place_robot(5, 1.5, -1.8, std::f32::consts::PI);
+        m.sim_mut().place_robot(4, 2.6, 0.0, std::f32::consts::PI);
+        m.step(&STAY);
+        (m.rewards(Team::Blue), m.rewards(Team::Red))
+    };
+    let (blue, red) = rewards_with(0.0);
+    assert_eq!(blue, [0.0; 4]);
+    assert_eq!(red, [0.0; 4]);
+    let (blue, red) = rewards_with(0.25);
+    assert_eq!(blue, [0.0, 0.0, -0.25, -0.25]);
+    assert_eq!(red, [0.0; 4]);
+    let mut cfg = MatchConfig::default();
+    cfg.reward.crowd_radius = 0.0;
+    assert!(Match::new(&cfg, 1).is_err());
+}
