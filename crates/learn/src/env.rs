@@ -422,7 +422,7 @@ impl VecEnv {
     /// every match starts its current episode afresh. See [`PassDrills`].
     pub fn set_pass_drills(&mut self, drills: Option<PassDrills>) -> Result<(), LearnError> {
         if let Some(d) = drills {
-            let total = naosoccer_referee::Match::new(&self.cfg, 0)?.total_ticks();
+            let total = self.slots[0].m.total_ticks();
             if d.matches == 0 || d.matches > self.slots.len() {
                 return Err(LearnError::Config(format!(
                     "pass drills in {} matches: between 1 and the {} matches played",
@@ -430,7 +430,7 @@ impl VecEnv {
                     self.slots.len()
                 )));
             }
-            if d.ticks == 0 || total % d.ticks != 0 {
+            if d.ticks == 0 || !total.is_multiple_of(d.ticks) {
                 return Err(LearnError::Config(format!(
                     "a pass drill of {} ticks must divide the match's {total} ticks",
                     d.ticks
@@ -743,18 +743,35 @@ impl Slot {
         Ok(())
     }
 
+    /// A generator for placing this episode, seeded by the run's seed
+    /// (mixed with `salt`), the match and the episode.
+    fn episode_rng(&self, env: &EnvConfig, salt: u64) -> rand_chacha::ChaCha8Rng {
+        use rand::SeedableRng;
+        rand_chacha::ChaCha8Rng::seed_from_u64(episode_seed(
+            env.seed ^ salt,
+            self.index,
+            self.episode,
+        ))
+    }
+
+    /// The learner's frame to the world's: the sign of x and y and the
+    /// turn added to a heading (red sees the world turned half round).
+    fn to_world(&self) -> (f32, f32) {
+        if self.team == Team::Blue {
+            (1.0, 0.0)
+        } else {
+            (-1.0, std::f32::consts::PI)
+        }
+    }
+
     /// Stages a pass drill episode (see [`PassDrills`]), placed from the
     /// episode's seed.
     fn place_pass_drill(&mut self, env: &EnvConfig) {
         let Some(drill) = self.pass_drill else {
             return;
         };
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(episode_seed(
-            env.seed ^ 0x9A55_D111_1D00,
-            self.index,
-            self.episode,
-        ));
+        use rand::Rng;
+        let mut rng = self.episode_rng(env, 0x9A55_D111_1D00);
         let half_x = self.m.config().sim.field_length * 0.5;
         let half_y = self.m.config().sim.field_width * 0.5;
         // Kicker and receiver: two own players, learners first.
@@ -821,13 +838,7 @@ impl Slot {
         for p in 1..PLAYERS_PER_TEAM {
             spots[foe + p] = draw(&mut rng, (-2.0, half_x - 0.4), 1.2, 0.5);
         }
-        // The learner's frame to the world's: red sees the world turned
-        // half round.
-        let (sign, turn) = if self.team == Team::Blue {
-            (1.0, 0.0)
-        } else {
-            (-1.0, std::f32::consts::PI)
-        };
+        let (sign, turn) = self.to_world();
         let world = spots.map(|(x, y, h)| (sign * x, sign * y, h + turn));
         self.m
             .sim_mut()
@@ -841,20 +852,9 @@ impl Slot {
         let Some(d) = self.drill else {
             return;
         };
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(episode_seed(
-            env.seed ^ 0xD1_11D1_11D1,
-            self.index,
-            self.episode,
-        ));
-        // The learner's frame to the world's: red sees the world turned
-        // half round.
-        let sign = if self.team == Team::Blue { 1.0 } else { -1.0 };
-        let turn = if self.team == Team::Blue {
-            0.0
-        } else {
-            std::f32::consts::PI
-        };
+        use rand::Rng;
+        let mut rng = self.episode_rng(env, 0xD1_11D1_11D1);
+        let (sign, turn) = self.to_world();
         let bx = rng.random_range(d.ball_x.0..=d.ball_x.1);
         let by = rng.random_range(-d.ball_y..=d.ball_y);
         let sim = self.m.sim_mut();

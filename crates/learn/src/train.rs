@@ -630,8 +630,6 @@ fn train_ppo_decisions(
                         bootstrap.unwrap_or(0.0),
                         bootstrap.is_none(),
                     );
-                    // A cut stream does not go on into the next episode.
-                    p.prev = None;
                     holds[r].reset();
                 }
             }
