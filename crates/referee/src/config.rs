@@ -200,6 +200,31 @@ pub struct RewardConfig {
     pub crowd: f32,
     #[serde(skip_serializing_if = "is_one")]
     pub crowd_radius: f32,
+    /// Ours: paid (outside the log) every tick to a standing robot, not its
+    /// team's chaser, that stands ahead of the ball: at least `ahead_by`
+    /// metres nearer the opponent goal than the ball and between
+    /// `ahead_min` and `ahead_max` metres from it, where a kick toward the
+    /// goal can find it. The potential-based `support` cannot ask for
+    /// that: unlike the shaping terms this changes which policies are best. 0 (off) by default, and left
+    /// out of the configuration's JSON form while off (the other fields
+    /// while at their defaults), so configurations from before it keep
+    /// their hash.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub ahead: f32,
+    #[serde(skip_serializing_if = "is_default_ahead_by")]
+    pub ahead_by: f32,
+    #[serde(skip_serializing_if = "is_one")]
+    pub ahead_min: f32,
+    #[serde(skip_serializing_if = "is_default_ahead_max")]
+    pub ahead_max: f32,
+}
+
+fn is_default_ahead_by(v: &f32) -> bool {
+    *v == 0.5
+}
+
+fn is_default_ahead_max(v: &f32) -> bool {
+    *v == 3.0
 }
 
 fn is_zero(v: &f32) -> bool {
@@ -233,6 +258,10 @@ impl Default for RewardConfig {
             aim_lane: 0.0,
             crowd: 0.0,
             crowd_radius: 1.0,
+            ahead: 0.0,
+            ahead_by: 0.5,
+            ahead_min: 1.0,
+            ahead_max: 3.0,
         }
     }
 }
@@ -383,11 +412,23 @@ impl MatchConfig {
             ("reward.aim_range", w.aim_range),
             ("reward.aim_lane", w.aim_lane),
             ("reward.crowd", w.crowd),
+            ("reward.ahead", w.ahead),
+            ("reward.ahead_by", w.ahead_by),
+            ("reward.ahead_min", w.ahead_min),
         ] {
             non_negative(field, v)?;
         }
         positive("reward.close_scale", w.close_scale)?;
         positive("reward.crowd_radius", w.crowd_radius)?;
+        if !(w.ahead_max.is_finite() && w.ahead_max > w.ahead_min) {
+            return Err(ConfigError::Invalid {
+                field: "reward.ahead_max",
+                reason: format!(
+                    "must be a finite number above reward.ahead_min ({}), got {}",
+                    w.ahead_min, w.ahead_max
+                ),
+            });
+        }
         if !(w.shaping_gamma.is_finite() && w.shaping_gamma > 0.0 && w.shaping_gamma <= 1.0) {
             return Err(ConfigError::Invalid {
                 field: "reward.shaping_gamma",

@@ -222,6 +222,9 @@ impl Match {
         if self.cfg.reward.crowd > 0.0 {
             self.charge_crowding();
         }
+        if self.cfg.reward.ahead > 0.0 {
+            self.pay_ahead();
+        }
         self.run_rules(tick);
         self.apply_commands(tick);
         for e in &self.outcome.events {
@@ -306,6 +309,33 @@ impl Match {
             if crowded {
                 self.shaping[i] -= w.crowd;
             }
+        }
+    }
+
+    /// `RewardConfig::ahead`: pays each standing robot but its team's
+    /// chaser that stands ahead of the ball, in the state the tick's
+    /// physics reached (before any restart).
+    fn pay_ahead(&mut self) {
+        let w = &self.cfg.reward;
+        let snap = self.sim.snapshot();
+        let down = self.fall.down();
+        let [bx, by, _] = snap.ball.pos;
+        let dist: [f32; ROBOTS] = std::array::from_fn(|i| {
+            let r = &snap.robots[i];
+            (bx - r.pos[0]).hypot(by - r.pos[1])
+        });
+        for i in 0..ROBOTS {
+            let team = i / PLAYERS_PER_TEAM;
+            let chaser = (team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM)
+                .all(|j| j == i || dist[i] < dist[j] || (dist[i] == dist[j] && i < j));
+            if down[i] || chaser || dist[i] < w.ahead_min || dist[i] > w.ahead_max {
+                continue;
+            }
+            let sx = if team == 0 { 1.0 } else { -1.0 };
+            if sx * (snap.robots[i].pos[0] - bx) < w.ahead_by {
+                continue;
+            }
+            self.shaping[i] += w.ahead;
         }
     }
 
