@@ -1,5 +1,4 @@
 //! One module per subcommand (or family of subcommands).
-pub mod animate;
 pub mod bench;
 pub mod client;
 pub mod eval;
