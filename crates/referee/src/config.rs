@@ -200,15 +200,16 @@ pub struct RewardConfig {
     pub crowd: f32,
     #[serde(skip_serializing_if = "is_one")]
     pub crowd_radius: f32,
-    /// Ours: paid (outside the log) every tick to a standing robot, not its
-    /// team's chaser, that stands ahead of the ball: at least `ahead_by`
-    /// metres nearer the opponent goal than the ball and between
+    /// Ours: paid (outside the log) every tick its team has the ball (a
+    /// teammate controlled it when the tick started) to a standing robot,
+    /// not its team's chaser, that stands ahead of the ball: at least
+    /// `ahead_by` metres nearer the opponent goal than the ball and between
     /// `ahead_min` and `ahead_max` metres from it, where a kick toward the
-    /// goal can find it. The potential-based `support` cannot ask for
-    /// that: unlike the shaping terms this changes which policies are best. 0 (off) by default, and left
-    /// out of the configuration's JSON form while off (the other fields
-    /// while at their defaults), so configurations from before it keep
-    /// their hash.
+    /// goal can find it. The potential-based `support` cannot ask for that:
+    /// unlike the shaping terms this changes which policies are best. 0
+    /// (off) by default, and left out of the configuration's JSON form
+    /// while off (the other fields while at their defaults), so
+    /// configurations from before it keep their hash.
     #[serde(skip_serializing_if = "is_zero")]
     pub ahead: f32,
     #[serde(skip_serializing_if = "is_default_ahead_by")]

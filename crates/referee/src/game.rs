@@ -314,8 +314,12 @@ impl Match {
 
     /// `RewardConfig::ahead`: pays each standing robot but its team's
     /// chaser that stands ahead of the ball, in the state the tick's
-    /// physics reached (before any restart).
+    /// physics reached (before any restart), while its team has the ball
+    /// (a teammate controlled it at the start of the tick).
     fn pay_ahead(&mut self) {
+        let Some(holder) = self.controller else {
+            return;
+        };
         let w = &self.cfg.reward;
         let snap = self.sim.snapshot();
         let down = self.fall.down();
@@ -324,8 +328,8 @@ impl Match {
             let r = &snap.robots[i];
             (bx - r.pos[0]).hypot(by - r.pos[1])
         });
-        for i in 0..ROBOTS {
-            let team = i / PLAYERS_PER_TEAM;
+        let team = holder.index() / PLAYERS_PER_TEAM;
+        for i in team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM {
             let chaser = (team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM)
                 .all(|j| j == i || dist[i] < dist[j] || (dist[i] == dist[j] && i < j));
             if down[i] || chaser || dist[i] < w.ahead_min || dist[i] > w.ahead_max {

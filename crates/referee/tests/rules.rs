@@ -1075,17 +1075,20 @@ fn crowd_charges_a_robot_next_to_a_teammate_nearer_the_ball() {
     assert!(Match::new(&cfg, 1).is_err());
 }
 
-/// `reward.ahead`: every tick, a standing robot other than its team's
-/// chaser is paid `ahead` when it stands at least `ahead_by` metres nearer
-/// the opponent goal than the ball and `ahead_min` to `ahead_max` metres
-/// from it, for either team's direction of play; nobody is paid while the
-/// term is off. Off, the configuration's JSON form has no such fields
-/// (older configurations keep their hash).
+/// `reward.ahead`: every tick its team has the ball (a teammate controlled
+/// it when the tick started), a standing robot other than its team's chaser
+/// is paid `ahead` when it stands at least `ahead_by` metres nearer the
+/// opponent goal than the ball and `ahead_min` to `ahead_max` metres from
+/// it, for either team's direction of play. Nobody is paid while nobody
+/// has the ball, nor while the term is off. Off, the configuration's JSON
+/// form has no such fields (older configurations keep their hash).
 #[test]
-fn ahead_pays_a_robot_ahead_of_the_ball_within_reach_of_a_kick() {
+fn ahead_pays_a_robot_ahead_of_the_ball_while_its_team_has_it() {
     let text = serde_json::to_string(&MatchConfig::default()).unwrap();
     assert!(!text.contains("\"ahead"), "{text}");
-    let rewards_with = |ahead: f32| {
+    // The rewards of the match's first tick (nobody had the ball when it
+    // started) and of the second, with blue's or red's chaser at the ball.
+    let rewards_with = |ahead: f32, red_has_ball: bool| {
         let mut cfg = MatchConfig::default();
         shaping_only(&mut cfg);
         cfg.reward.close = 0.0;
@@ -1095,26 +1098,38 @@ fn ahead_pays_a_robot_ahead_of_the_ball_within_reach_of_a_kick() {
         m.sim_mut().place_ball(0.5, 0.0);
         // Blue attacks +x. 1 is the chaser; 2 is 1.5 m ahead and 1.6 m
         // away (paid); 3 only 0.3 m ahead; 0 behind the ball.
-        m.sim_mut().place_robot(1, 0.2, 0.0, 0.0);
+        let (x1, (x7, y7)) = if red_has_ball {
+            (-0.1, (0.7, 0.0))
+        } else {
+            (0.3, (0.9, 0.3))
+        };
+        m.sim_mut().place_robot(1, x1, 0.0, 0.0);
         m.sim_mut().place_robot(2, 2.0, 0.5, 0.0);
         m.sim_mut().place_robot(3, 0.8, 1.2, 0.0);
         m.sim_mut().place_robot(0, -1.0, 0.0, 0.0);
         // Red attacks -x. 7 is its chaser; 4 is 1.5 m ahead (toward -x)
         // and 1.8 m away (paid); 5 within a metre of the ball; 6 ahead
         // but 3.1 m away.
-        m.sim_mut().place_robot(7, 0.9, 0.3, std::f32::consts::PI);
+        m.sim_mut().place_robot(7, x7, y7, std::f32::consts::PI);
         m.sim_mut().place_robot(4, -1.0, 1.0, std::f32::consts::PI);
         m.sim_mut().place_robot(5, -0.2, -0.3, std::f32::consts::PI);
         m.sim_mut().place_robot(6, -2.4, -1.2, std::f32::consts::PI);
         m.step(&STAY);
-        (m.rewards(Team::Blue), m.rewards(Team::Red))
+        let first = (m.rewards(Team::Blue), m.rewards(Team::Red));
+        m.step(&STAY);
+        (first, (m.rewards(Team::Blue), m.rewards(Team::Red)))
     };
-    let (blue, red) = rewards_with(0.0);
-    assert_eq!(blue, [0.0; 4]);
-    assert_eq!(red, [0.0; 4]);
-    let (blue, red) = rewards_with(0.25);
-    assert_eq!(blue, [0.0, 0.0, 0.25, 0.0]);
-    assert_eq!(red, [0.25, 0.0, 0.0, 0.0]);
+    for red_has_ball in [false, true] {
+        let (first, second) = rewards_with(0.0, red_has_ball);
+        assert_eq!(first, ([0.0; 4], [0.0; 4]));
+        assert_eq!(second, ([0.0; 4], [0.0; 4]));
+        let (first, _) = rewards_with(0.25, red_has_ball);
+        assert_eq!(first, ([0.0; 4], [0.0; 4]), "nobody had the ball");
+    }
+    let (_, blue_ball) = rewards_with(0.25, false);
+    assert_eq!(blue_ball, ([0.0, 0.0, 0.25, 0.0], [0.0; 4]));
+    let (_, red_ball) = rewards_with(0.25, true);
+    assert_eq!(red_ball, ([0.0; 4], [0.25, 0.0, 0.0, 0.0]));
     let mut cfg = MatchConfig::default();
     cfg.reward.ahead_max = cfg.reward.ahead_min;
     assert!(Match::new(&cfg, 1).is_err());
