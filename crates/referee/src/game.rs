@@ -244,10 +244,7 @@ impl Match {
         let w = &self.cfg.reward;
         let snap = self.sim.snapshot();
         let [bx, by, _] = snap.ball.pos;
-        let dist: [f32; ROBOTS] = std::array::from_fn(|i| {
-            let r = &snap.robots[i];
-            (bx - r.pos[0]).hypot(by - r.pos[1])
-        });
+        let dist = ball_distances(snap);
         if w.support <= 0.0 {
             return std::array::from_fn(|i| {
                 let sx = if i < PLAYERS_PER_TEAM { 1.0 } else { -1.0 };
@@ -256,12 +253,7 @@ impl Match {
         }
         // Each robot's rank in its team by distance to the ball (the lower
         // index first on a tie): 0 is the team's chaser.
-        let rank = |i: usize| {
-            let team = i / PLAYERS_PER_TEAM;
-            (team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM)
-                .filter(|&j| dist[j] < dist[i] || (dist[j] == dist[i] && j < i))
-                .count()
-        };
+        let rank = |i: usize| teammates(i).filter(|&j| nearer_ball(&dist, j, i)).count();
         let (lx, ly) = (
             (self.field.half_length - 0.3).max(0.0),
             (self.field.half_width - 0.3).max(0.0),
@@ -290,21 +282,15 @@ impl Match {
         let w = &self.cfg.reward;
         let snap = self.sim.snapshot();
         let down = self.fall.down();
-        let [bx, by, _] = snap.ball.pos;
-        let dist: [f32; ROBOTS] = std::array::from_fn(|i| {
-            let r = &snap.robots[i];
-            (bx - r.pos[0]).hypot(by - r.pos[1])
-        });
+        let dist = ball_distances(snap);
         for i in 0..ROBOTS {
             if down[i] {
                 continue;
             }
-            let team = i / PLAYERS_PER_TEAM;
             let [x, y, _] = snap.robots[i].pos;
-            let crowded = (team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM).any(|j| {
-                let nearer = dist[j] < dist[i] || (dist[j] == dist[i] && j < i);
+            let crowded = teammates(i).any(|j| {
                 let [xj, yj, _] = snap.robots[j].pos;
-                j != i && !down[j] && nearer && (xj - x).hypot(yj - y) < w.crowd_radius
+                !down[j] && nearer_ball(&dist, j, i) && (xj - x).hypot(yj - y) < w.crowd_radius
             });
             if crowded {
                 self.shaping[i] -= w.crowd;
@@ -323,19 +309,18 @@ impl Match {
         let w = &self.cfg.reward;
         let snap = self.sim.snapshot();
         let down = self.fall.down();
-        let [bx, by, _] = snap.ball.pos;
-        let dist: [f32; ROBOTS] = std::array::from_fn(|i| {
-            let r = &snap.robots[i];
-            (bx - r.pos[0]).hypot(by - r.pos[1])
-        });
-        let team = holder.index() / PLAYERS_PER_TEAM;
-        for i in team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM {
-            let chaser = (team * PLAYERS_PER_TEAM..(team + 1) * PLAYERS_PER_TEAM)
-                .all(|j| j == i || dist[i] < dist[j] || (dist[i] == dist[j] && i < j));
+        let bx = snap.ball.pos[0];
+        let dist = ball_distances(snap);
+        let sx = if holder.index() < PLAYERS_PER_TEAM {
+            1.0
+        } else {
+            -1.0
+        };
+        for i in teammates(holder.index()) {
+            let chaser = !teammates(i).any(|j| nearer_ball(&dist, j, i));
             if down[i] || chaser || dist[i] < w.ahead_min || dist[i] > w.ahead_max {
                 continue;
             }
-            let sx = if team == 0 { 1.0 } else { -1.0 };
             if sx * (snap.robots[i].pos[0] - bx) < w.ahead_by {
                 continue;
             }
@@ -667,6 +652,27 @@ impl Match {
 }
 
 /// The pass bonus of `RewardConfig::pass`, for a long enough forward pass.
+/// Each robot's horizontal distance to the ball.
+fn ball_distances(snap: &naosoccer_sim::Snapshot) -> [f32; ROBOTS] {
+    let [bx, by, _] = snap.ball.pos;
+    std::array::from_fn(|i| {
+        let r = &snap.robots[i];
+        (bx - r.pos[0]).hypot(by - r.pos[1])
+    })
+}
+
+/// The robot indices of robot `i`'s team, `i` included.
+fn teammates(i: usize) -> std::ops::Range<usize> {
+    let first = i / PLAYERS_PER_TEAM * PLAYERS_PER_TEAM;
+    first..first + PLAYERS_PER_TEAM
+}
+
+/// Whether robot `j` is nearer the ball than robot `i` (the lower index on
+/// a tie; never `i` itself): the order that picks a team's chaser.
+fn nearer_ball(dist: &[f32; ROBOTS], j: usize, i: usize) -> bool {
+    dist[j] < dist[i] || (dist[j] == dist[i] && j < i)
+}
+
 fn pass_bonus(w: &RewardConfig, shaping: &mut [f32; ROBOTS], p: PassMade) {
     if w.pass <= 0.0 {
         return;
