@@ -240,7 +240,7 @@ class Client:
     ) -> None:
         """Answers the observation of ``tick`` with ``(player, action)`` pairs.
 
-        Actions are indices 0..4 (see :data:`protocol.ACTIONS`) or names. No
+        Actions are indices 0..5 (see :data:`protocol.ALL_ACTIONS`) or names. No
         reply follows unless the server rejects them; the rejection then
         arrives as the next message and :meth:`recv` raises it.
         """

@@ -15,7 +15,7 @@ from typing import Any, Dict, List, Optional, Tuple
 PROTOCOL_NAME = "naosoccer"
 #: The protocol version this package speaks. The server must agree on the
 #: major version; a newer minor version only adds optional fields and types.
-PROTOCOL_VERSION = (1, 2)
+PROTOCOL_VERSION = (1, 3)
 
 HEADER_LEN = 4
 #: The server's default cap on a frame's payload; ``welcome`` announces the
@@ -28,7 +28,11 @@ TEAMS = ("blue", "red")
 #: The paper's five actions, in the order of their discrete index (the same
 #: order as the Rust ``Action::ALL``).
 ACTIONS = ("forward", "turn_left", "turn_right", "shoot", "stay")
-ACTION_INDEX = {name: i for i, name in enumerate(ACTIONS)}
+#: Every action the server takes: the paper's five and, from protocol 1.3,
+#: ``pass`` (index 5), a kick toward the teammate the protocol's pass rule
+#: names (docs/PROTOCOL.md, "action").
+ALL_ACTIONS = ACTIONS + ("pass",)
+ACTION_INDEX = {name: i for i, name in enumerate(ALL_ACTIONS)}
 STAY = ACTION_INDEX["stay"]
 
 #: Messages the server pushes without a request once a join is accepted.
@@ -114,8 +118,8 @@ def action_name(action: Any) -> Any:
         return action
     if i != action:
         return action
-    if 0 <= i < len(ACTIONS):
-        return ACTIONS[i]
+    if 0 <= i < len(ALL_ACTIONS):
+        return ALL_ACTIONS[i]
     return i
 
 

@@ -78,12 +78,16 @@ def test_action_message_uses_wire_names_and_passes_bad_values_through():
     }
     json.dumps(msg)  # numpy integers were converted
     assert protocol.ACTIONS == ("forward", "turn_left", "turn_right", "shoot", "stay")
+    # Protocol 1.3's sixth action, by index or name.
+    msg = protocol.action_msg(8, [(0, 5), (1, "pass")])
+    assert [a["action"] for a in msg["actions"]] == ["pass", "pass"]
+    assert protocol.ALL_ACTIONS[:5] == protocol.ACTIONS and protocol.ACTION_INDEX["pass"] == 5
 
 
 def test_hello_names_the_protocol_and_version():
     h = protocol.hello("t")
     assert h["type"] == "hello" and h["protocol"] == "naosoccer"
-    assert h["version"] == {"major": 1, "minor": 2}
+    assert h["version"] == {"major": 1, "minor": 3}
 
 
 def test_error_carries_the_server_fields():

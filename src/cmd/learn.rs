@@ -85,6 +85,18 @@ pub struct TrainArgs {
     /// Team presets: let robots shoot with the ball out of reach.
     #[arg(long)]
     no_shoot_mask: bool,
+    /// PPO team preset: give the robots a sixth action, `pass` (a kick
+    /// toward the teammate the protocol's pass rule names; see
+    /// docs/PROTOCOL.md), possible only with the ball in kick reach and a
+    /// teammate to receive it.
+    #[arg(long)]
+    pass_action: bool,
+    /// PPO team preset: start from these weights (a run directory's
+    /// final.safetensors, or a .safetensors checkpoint) with a fresh
+    /// optimiser; the networks must have the run's shape, except that a
+    /// team trained without `pass` gains it (with --pass-action).
+    #[arg(long, value_name = "DIR|FILE", conflicts_with = "resume")]
+    init_from: Option<PathBuf>,
     /// PPO: the critic reads the whole team's observations (MAPPO).
     #[arg(long)]
     central_critic: bool,
@@ -251,12 +263,14 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
             d.persist = k;
         }
         d.mask_shoot &= !a.no_shoot_mask;
+        d.pass = a.pass_action;
     } else {
         anyhow::ensure!(
-            a.persist.is_none() && !a.no_shoot_mask,
-            "--persist and --no-shoot-mask apply to the team preset"
+            a.persist.is_none() && !a.no_shoot_mask && !a.pass_action,
+            "--persist, --no-shoot-mask and --pass-action apply to the team preset"
         );
     }
+    cfg.init_from = a.init_from.clone();
     if let Some(v) = a.obs_version {
         cfg.obs_version = v;
     }

@@ -243,6 +243,100 @@ fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
     }
 }
 
+/// `train --pass-action --init-from`: a shipped team (five actions) seeds a
+/// run with the sixth action, `pass`; the run records both, trains, and
+/// plays; DQN and non-team presets refuse the flags by name.
+#[cfg(feature = "train")]
+#[test]
+fn pass_action_runs_start_from_a_shipped_team_and_play() {
+    let run = dir("cli_pass_action");
+    let run_s = run.to_str().unwrap();
+    let shipped = format!(
+        "{}/assets/policies/ppo-team-seed1",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let args = |algo: &'static str, preset: &'static str| {
+        vec![
+            "train",
+            "--algo",
+            algo,
+            "--preset",
+            preset,
+            "--obs-version",
+            "3",
+            "--pass-action",
+            "--steps",
+            "2048",
+            "--seed",
+            "5",
+            "--matches",
+            "4",
+            "--minutes",
+            "0.1",
+            "--out",
+        ]
+    };
+    let mut a = args("ppo", "team");
+    a.extend(["--init-from", &shipped, run_s]);
+    let out = naosoccer(&a);
+    assert!(
+        out.status.success(),
+        "train failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap();
+    assert_eq!(config["ppo"]["decision"]["pass"], true);
+    assert_eq!(config["init_from"], serde_json::json!(shipped));
+    let out = naosoccer(&[
+        "eval",
+        "--blue",
+        &format!("ppo:{run_s}"),
+        "--red",
+        "scripted",
+        "--matches",
+        "1",
+        "--minutes",
+        "0.2",
+    ]);
+    assert!(
+        out.status.success(),
+        "eval failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let other = dir("cli_pass_action_refused");
+    let other_s = other.to_str().unwrap();
+    for (algo, preset, says) in [("dqn", "team", "PPO"), ("ppo", "cleanrl", "team preset")] {
+        let mut a = args(algo, preset);
+        a.push(other_s);
+        let out = naosoccer(&a);
+        assert!(
+            !out.status.success(),
+            "{algo} {preset} must refuse --pass-action"
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("pass") && err.contains(says),
+            "{algo} {preset}: {err}"
+        );
+    }
+    // A network of another shape is named, not loaded.
+    let mut a = args("ppo", "team");
+    let paper = format!(
+        "{}/assets/policies/ppo-paper-seed1",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    a.extend(["--init-from", &paper, other_s]);
+    let out = naosoccer(&a);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--init-from") && err.contains("actor."),
+        "{err}"
+    );
+}
+
 /// `eval --both-sides` against a shipped scripted variant: each team keeps
 /// its name, half the matches swap the sides, the win rate carries its
 /// Wilson interval, and the seeds are evaluation seeds.

@@ -130,7 +130,7 @@ async fn a_1_1_client_still_plays() {
     )
     .await;
     match recv(&mut s).await.0 {
-        Msg11::Welcome { version } => assert_eq!((version.major, version.minor), (1, 2)),
+        Msg11::Welcome { version } => assert_eq!((version.major, version.minor), (1, 3)),
         other => panic!("{other:?}"),
     }
     send(

@@ -26,7 +26,14 @@ use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEA
 use naosoccer_referee::rules::segment_distance;
 use naosoccer_referee::{Match, MatchConfig};
 
-const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
+const NAMES: [&str; 6] = [
+    "forward",
+    "turn_left",
+    "turn_right",
+    "shoot",
+    "stay",
+    "pass",
+];
 /// The team probed: a trained one, or a built-in one robot by robot.
 enum Blue {
     Learned(Box<LearnedPolicy>),
@@ -240,7 +247,7 @@ fn main() {
                     if open {
                         pass_counts[acts[p].index()] += 1;
                     }
-                    if acts[p] == Action::Shoot {
+                    if matches!(acts[p], Action::Shoot | Action::Pass) {
                         aimed_at[p] = open;
                     }
                     if in_reach {

@@ -96,6 +96,12 @@ pub struct TrainConfig {
     /// Pass drills mixed into the matches (see `env::PassDrills`).
     #[serde(default)]
     pub pass_drills: Option<PassDrills>,
+    /// PPO team preset: the run starts from these weights (a finished run's
+    /// `final.safetensors`, or a checkpoint) instead of fresh ones, with a
+    /// fresh optimiser. An actor trained without `pass` gains it, its
+    /// logit starting as a copy of `shoot`'s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub init_from: Option<std::path::PathBuf>,
 }
 
 impl TrainConfig {
@@ -118,6 +124,7 @@ impl TrainConfig {
             match_config,
             drill: None,
             pass_drills: None,
+            init_from: None,
         }
     }
 }

@@ -166,6 +166,7 @@ impl DqnConfig {
             decision: Some(DecisionConfig {
                 persist: 3,
                 mask_shoot: true,
+                pass: false,
             }),
         }
     }

@@ -29,7 +29,9 @@ use crate::nets::{Activation, InitScheme, Mlp};
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
 
-pub use naosoccer_policy::actions::{sample, shoot_mask, DecisionConfig, ACTIONS, SHOOT, STAY};
+pub use naosoccer_policy::actions::{
+    action_count, action_mask, sample, shoot_mask, DecisionConfig, ACTIONS, PASS, SHOOT, STAY,
+};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -179,6 +181,7 @@ impl PpoConfig {
             decision: Some(DecisionConfig {
                 persist: 3,
                 mask_shoot: true,
+                pass: false,
             }),
         }
     }
@@ -194,6 +197,11 @@ impl PpoConfig {
     /// Whether `shoot` is masked out of reach.
     pub fn masks_shoot(&self) -> bool {
         self.decision.is_some_and(|d| d.mask_shoot)
+    }
+
+    /// How many actions the actor chooses among: 5, or 6 with `pass`.
+    pub fn actions(&self) -> usize {
+        action_count(self.decision)
     }
 }
 
@@ -237,7 +245,7 @@ impl ActorCritic {
             &(root.set_group(0) / "actor"),
             obs_dim,
             &cfg.hidden,
-            ACTIONS,
+            cfg.actions(),
             Activation::Tanh,
             ai,
         );
@@ -425,12 +433,14 @@ impl Ppo {
     }
 
     /// Samples one action per row (`n` rows of `OBS_DIM`), `shoot` masked
-    /// where `shoot_ok` is false; writes the actions and their
-    /// log-probabilities under the masked policy.
+    /// where `shoot_ok` is false and `pass` (with six actions) where
+    /// `pass_ok` is; writes the actions and their log-probabilities under
+    /// the masked policy.
     pub fn act_masked(
         &mut self,
         obs: &[f32],
         shoot_ok: &[bool],
+        pass_ok: &[bool],
         rng: &mut ChaCha8Rng,
         actions: &mut [usize],
         logp: &mut [f32],
@@ -439,13 +449,15 @@ impl Ppo {
         if n == 0 {
             return;
         }
+        let k = self.cfg.actions();
         let x = self.net.actor_input(obs, n);
-        let mask = Tensor::from_slice(&shoot_mask(&shoot_ok[..n])).view([n as i64, ACTIONS as i64]);
+        let m = action_mask(&shoot_ok[..n], pass_ok, k);
+        let mask = Tensor::from_slice(&m).view([n as i64, k as i64]);
         let p = tch::no_grad(|| (self.net.logits(&x) + mask).softmax(-1, Kind::Float));
-        self.probs.resize(n * ACTIONS, 0.0);
-        p.copy_data(&mut self.probs, n * ACTIONS);
+        self.probs.resize(n * k, 0.0);
+        p.copy_data(&mut self.probs, n * k);
         for i in 0..n {
-            let row = &self.probs[i * ACTIONS..(i + 1) * ACTIONS];
+            let row = &self.probs[i * k..(i + 1) * k];
             let a = sample(row, rng.random::<f32>());
             actions[i] = a;
             logp[i] = row[a].max(1e-12).ln();
@@ -508,7 +520,9 @@ impl Ppo {
         let cobs = Tensor::from_slice(&tr.critic_obs[..n * cw]).view([n as i64, cw as i64]);
         let actions = Tensor::from_slice(&tr.actions);
         let logp_old = Tensor::from_slice(&tr.logp);
-        let mask = Tensor::from_slice(&shoot_mask(&tr.shoot_ok)).view([n as i64, ACTIONS as i64]);
+        let k = cfg.actions();
+        let mask = Tensor::from_slice(&action_mask(&tr.shoot_ok, &tr.pass_ok, k))
+            .view([n as i64, k as i64]);
         let adv = Tensor::from_slice(&adv);
         let targets = Tensor::from_slice(&targets);
         let mb = n.div_ceil(cfg.minibatches.max(1));
@@ -792,6 +806,8 @@ pub struct Transitions {
     pub actions: Vec<i64>,
     pub logp: Vec<f32>,
     pub shoot_ok: Vec<bool>,
+    /// Whether `pass` was possible (empty without the `pass` action).
+    pub pass_ok: Vec<bool>,
     /// V(s) at the decision, in return units.
     pub values: Vec<f32>,
     /// `sum_{i < dt} gamma^i r_i`: the rewards until the next decision.
@@ -822,6 +838,7 @@ impl Transitions {
         self.actions.clear();
         self.logp.clear();
         self.shoot_ok.clear();
+        self.pass_ok.clear();
         self.values.clear();
         self.rewards.clear();
         self.dt.clear();
@@ -949,6 +966,7 @@ mod tests {
             actions: vec![0, 0, 1],
             logp: vec![0.0; 3],
             shoot_ok: vec![true; 3],
+            pass_ok: vec![],
             // Closing order: A's first (index 0), A's second (1, at the
             // edge), B's (2, at the end).
             values: vec![1.0, 2.0, 0.5],
@@ -1011,7 +1029,7 @@ mod tests {
         let (mut a, mut lp) = (vec![0; n], vec![0.0; n]);
         let mut shot_when_allowed = 0;
         for _ in 0..20 {
-            ppo.act_masked(&obs, &ok, &mut rng, &mut a, &mut lp);
+            ppo.act_masked(&obs, &ok, &[], &mut rng, &mut a, &mut lp);
             for i in 0..n {
                 if a[i] == SHOOT {
                     assert!(ok[i], "row {i} shot with the ball out of reach");

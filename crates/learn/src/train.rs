@@ -26,6 +26,7 @@ use crate::policy::{save_stores, Hold, LearnedPolicy};
 use crate::ppo::{Ppo, Rollout, Transitions, ACTIONS};
 use crate::schedule_runner::ScheduleRunner;
 use crate::LearnError;
+use naosoccer_policy::actions::pass_possible;
 
 // The configuration and the self-play snapshot live where the modules that
 // read them can reach them without importing the training loops; these are
@@ -269,6 +270,16 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             cfg.algo, cfg.obs_version
         )));
     }
+    if cfg.dqn.decision.is_some_and(|d| d.pass) {
+        return Err(LearnError::Config(
+            "the pass action is for PPO (--algo ppo --preset team) only".into(),
+        ));
+    }
+    if cfg.init_from.is_some() && (cfg.algo != Algo::Ppo || cfg.ppo.decision.is_none()) {
+        return Err(LearnError::Config(
+            "--init-from starts PPO team-preset runs (--algo ppo --preset team) only".into(),
+        ));
+    }
     if cfg.ppo.decision.is_some() && cfg.obs_version < 2 {
         return Err(LearnError::Config(
             "the decision-level MDP needs observation layout v2 (busy flags, kick reach)".into(),
@@ -442,6 +453,7 @@ struct Pending {
     logp: f32,
     value: f32,
     shoot_ok: bool,
+    pass_ok: bool,
     /// `sum gamma^i r_i` so far, and `gamma^elapsed`.
     reward: f32,
     discount: f32,
@@ -479,6 +491,9 @@ fn train_ppo_decisions(
     let mut self_play: Option<String> = None;
     let (mut run, mut sched) = match &resume {
         None => {
+            if let Some(from) = &cfg.init_from {
+                init_weights(&mut ppo, from)?;
+            }
             let run = RunDir::create(out, cfg)?;
             let sched = start_schedule(cfg, out, &mut env, &ppo)?;
             if matches!(cfg.opponent, OpponentSpec::SelfPlay { .. }) {
@@ -531,6 +546,9 @@ fn train_ppo_decisions(
     let (mut dec_rows, mut dec_obs, mut dec_cobs, mut dec_ok) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
+    // With the `pass` action: whether each deciding robot may pass.
+    let passes = decision.pass;
+    let mut dec_pass = Vec::new();
     let (mut cut_rows, mut cut_cobs, mut cut_val) = (Vec::new(), Vec::new(), Vec::new());
     let mut out_rows = Vec::new();
     let mut last_checkpoint = transitions;
@@ -547,6 +565,7 @@ fn train_ppo_decisions(
             dec_obs.clear();
             dec_cobs.clear();
             dec_ok.clear();
+            dec_pass.clear();
             for (r, hold) in holds.iter_mut().enumerate() {
                 let o = env.learner_observation(r);
                 if hold.must_decide(o) {
@@ -554,6 +573,7 @@ fn train_ppo_decisions(
                     dec_obs.extend_from_slice(&env.observations()[r * OBS_DIM..(r + 1) * OBS_DIM]);
                     push_critic_row(env.observations(), l, r, scale.dim(), cw, &mut dec_cobs);
                     dec_ok.push(!cfg.ppo.masks_shoot() || scale.kick.in_reach(o));
+                    dec_pass.push(passes && pass_possible(o, scale.kick.in_reach(o)));
                 } else {
                     actions[r] = hold.held(o);
                 }
@@ -562,7 +582,14 @@ fn train_ppo_decisions(
             dec_act.resize(k, 0);
             dec_logp.resize(k, 0.0);
             dec_val.resize(k, 0.0);
-            ppo.act_masked(&dec_obs, &dec_ok, &mut rng, &mut dec_act, &mut dec_logp);
+            ppo.act_masked(
+                &dec_obs,
+                &dec_ok,
+                &dec_pass,
+                &mut rng,
+                &mut dec_act,
+                &mut dec_logp,
+            );
             ppo.critic_values(&dec_cobs, &mut dec_val);
             for (j, &r) in dec_rows.iter().enumerate() {
                 let prev = close_pending(
@@ -579,6 +606,7 @@ fn train_ppo_decisions(
                     logp: dec_logp[j],
                     value: dec_val[j],
                     shoot_ok: dec_ok[j],
+                    pass_ok: dec_pass[j],
                     reward: 0.0,
                     discount: 1.0,
                     elapsed: 0,
@@ -705,6 +733,56 @@ fn train_ppo_decisions(
         transitions,
         final_weights,
     })
+}
+
+/// Loads `path`'s weights (a run's `final.safetensors` or a checkpoint, or
+/// a run directory holding `final.safetensors`) into `ppo`'s networks. Every
+/// variable must be there with its shape, except that an actor with the
+/// `pass` action may start from one without it: its extra output row (the
+/// last layer's weights and bias) starts as a copy of `shoot`'s, so `pass`
+/// is at first as likely as `shoot` where both are possible.
+pub fn init_weights(ppo: &mut Ppo, path: &Path) -> Result<(), LearnError> {
+    use crate::ppo::{PASS, SHOOT};
+    let file = if path.is_dir() {
+        path.join("final.safetensors")
+    } else {
+        path.to_path_buf()
+    };
+    let bad =
+        |reason: String| LearnError::Config(format!("--init-from {}: {reason}", file.display()));
+    if !file.is_file() {
+        return Err(bad("no such weights file".into()));
+    }
+    let named: std::collections::BTreeMap<String, tch::Tensor> =
+        tch::Tensor::read_safetensors(&file)?.into_iter().collect();
+    let mut vars: Vec<(String, tch::Tensor)> = ppo.net.vs.variables().into_iter().collect();
+    vars.sort_by(|a, b| a.0.cmp(&b.0));
+    for (name, mut var) in vars {
+        let src = named
+            .get(&name)
+            .ok_or_else(|| bad(format!("no tensor {name:?} (a run of another shape?)")))?;
+        let (want, got) = (var.size(), src.size());
+        tch::no_grad(|| -> Result<(), LearnError> {
+            if want == got {
+                var.copy_(src);
+            } else if name.starts_with("actor.")
+                && !want.is_empty()
+                && want[0] == PASS as i64 + 1
+                && got[0] == PASS as i64
+                && want[1..] == got[1..]
+            {
+                var.narrow(0, 0, PASS as i64).copy_(src);
+                var.narrow(0, PASS as i64, 1)
+                    .copy_(&src.narrow(0, SHOOT as i64, 1));
+            } else {
+                return Err(bad(format!(
+                    "{name} is {got:?} there, the run's network needs {want:?}"
+                )));
+            }
+            Ok(())
+        })?;
+    }
+    Ok(())
 }
 
 /// Where a decision-level run stands at a checkpoint (an episode boundary):
@@ -844,6 +922,7 @@ fn close_pending(
     tr.actions.push(p.action as i64);
     tr.logp.push(p.logp);
     tr.shoot_ok.push(p.shoot_ok);
+    tr.pass_ok.push(p.pass_ok);
     tr.values.push(p.value);
     tr.rewards.push(p.reward);
     tr.dt.push(p.elapsed.max(1));

@@ -1081,3 +1081,68 @@ fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
     assert_eq!(reported, 2);
     assert_eq!(staged, 2 * 11);
 }
+
+/// `--init-from`: a team trained without `pass` seeds one with it. The
+/// paper's five logits are carried over and `pass` starts as `shoot`; a
+/// network of another shape is refused by name.
+#[test]
+fn init_from_widens_the_actor_for_the_pass_action() {
+    use naosoccer_learn::ppo::{Ppo, PpoConfig, Preset, PASS, SHOOT};
+    use naosoccer_learn::train::init_weights;
+    let _g = torch_lock();
+    let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
+    let five = PpoConfig::preset(Preset::Team);
+    let mut six = five.clone();
+    six.decision.as_mut().unwrap().pass = true;
+    assert_eq!((five.actions(), six.actions()), (5, 6));
+    let src = Ppo::new(five.clone(), &scale, 4).unwrap();
+    let dir = out_dir("init_from_widens");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("final.safetensors");
+    naosoccer_learn::policy::save_stores(&[&src.net.vs], &file).unwrap();
+
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let n = 7;
+    let rows: Vec<f32> = (0..n * OBS_DIM)
+        .map(|_| rng.random_range(-1.0..1.0))
+        .collect();
+    let logits = |p: &Ppo| -> Vec<f32> {
+        let t = tch::no_grad(|| p.net.logits(&p.net.actor_input(&rows, n)));
+        let k = t.size()[1] as usize;
+        let mut v = vec![0.0f32; n * k];
+        t.copy_data(&mut v, n * k);
+        v
+    };
+    let before = logits(&src);
+    let mut dst = Ppo::new(six, &scale, 4).unwrap();
+    init_weights(&mut dst, &dir).unwrap();
+    let after = logits(&dst);
+    // (A 6-wide product may round differently from a 5-wide one.)
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-6;
+    for i in 0..n {
+        for a in 0..5 {
+            assert!(
+                close(after[i * 6 + a], before[i * 5 + a]),
+                "row {i}, action {a}"
+            );
+        }
+        assert!(close(after[i * 6 + PASS], before[i * 5 + SHOOT]), "row {i}");
+        assert!(close(after[i * 6 + PASS], after[i * 6 + SHOOT]), "row {i}");
+    }
+    // Same shape: a plain copy. Another hidden width: refused.
+    let mut same = Ppo::new(five.clone(), &scale, 4).unwrap();
+    init_weights(&mut same, &file).unwrap();
+    assert_eq!(logits(&same), before);
+    let mut wide = five;
+    wide.hidden = vec![32, 32];
+    let mut other = Ppo::new(wide, &scale, 4).unwrap();
+    let err = init_weights(&mut other, &file).unwrap_err().to_string();
+    assert!(
+        err.contains("actor.l0.bias") && err.contains("needs [32]"),
+        "{err}"
+    );
+    let err = init_weights(&mut same, &dir.join("missing.safetensors"))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no such weights file"), "{err}");
+}

@@ -6,9 +6,16 @@
 use naosoccer_proto::{Observation, Tick};
 use serde::{Deserialize, Serialize};
 
-/// Discrete actions, in `proto::Action::from_index` order: forward, turn
-/// left, turn right, shoot, stay.
+/// The paper's discrete actions, in `proto::Action::from_index` order:
+/// forward, turn left, turn right, shoot, stay. A team trained with
+/// [`DecisionConfig::pass`] has a sixth, `pass` ([`PASS`]).
 pub const ACTIONS: usize = 5;
+
+/// The most actions a network has (the paper's five and `pass`).
+pub const MAX_ACTIONS: usize = 6;
+
+/// Index of `pass`, the sixth action of teams trained with it.
+pub const PASS: usize = 5;
 
 /// Index of `shoot` among the actions.
 pub const SHOOT: usize = 3;
@@ -26,6 +33,33 @@ pub struct DecisionConfig {
     pub persist: u32,
     /// `shoot` is impossible while the ball is out of kick reach.
     pub mask_shoot: bool,
+    /// The robots have a sixth action, `pass` (protocol 1.3), possible only
+    /// while the ball is in kick reach and `proto::pass_receiver` names a
+    /// teammate. Absent from older runs' configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub pass: bool,
+}
+
+impl DecisionConfig {
+    /// How many actions the networks choose among: 5, or 6 with `pass`.
+    pub fn actions(&self) -> usize {
+        if self.pass {
+            MAX_ACTIONS
+        } else {
+            ACTIONS
+        }
+    }
+}
+
+/// The number of actions of a team in `decision` (`None`: the paper's five).
+pub fn action_count(decision: Option<DecisionConfig>) -> usize {
+    decision.map_or(ACTIONS, |d| d.actions())
+}
+
+/// Whether the robot that received `obs` may `pass` now: the ball is in
+/// kick reach (`in_reach`, from the encoder) and there is a receiver.
+pub fn pass_possible(obs: &Observation, in_reach: bool) -> bool {
+    in_reach && naosoccer_proto::pass_receiver(obs).is_some()
 }
 
 /// The uniform number in [0, 1) a sampling robot uses at `tick`: a hash of
@@ -69,10 +103,20 @@ pub fn argmax(v: &[f32]) -> usize {
 /// Additive logit masks for `n` rows: 0, or [`MASKED_LOGIT`] on `shoot`
 /// where `shoot_ok` is false.
 pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
-    let mut m = vec![0.0; shoot_ok.len() * ACTIONS];
+    action_mask(shoot_ok, &[], ACTIONS)
+}
+
+/// Additive logit masks for rows of `actions` logits: [`MASKED_LOGIT`] on
+/// `shoot` where `shoot_ok` is false and, with six actions, on `pass` where
+/// `pass_ok` is false (or missing).
+pub fn action_mask(shoot_ok: &[bool], pass_ok: &[bool], actions: usize) -> Vec<f32> {
+    let mut m = vec![0.0; shoot_ok.len() * actions];
     for (i, &ok) in shoot_ok.iter().enumerate() {
         if !ok {
-            m[i * ACTIONS + SHOOT] = MASKED_LOGIT;
+            m[i * actions + SHOOT] = MASKED_LOGIT;
+        }
+        if actions > PASS && !pass_ok.get(i).copied().unwrap_or(false) {
+            m[i * actions + PASS] = MASKED_LOGIT;
         }
     }
     m
@@ -112,10 +156,10 @@ impl Hold {
     }
 
     /// Records a decision at `tick`: a movement lasts `persist` ticks, a
-    /// `shoot` one (the kick then keeps the robot busy).
+    /// `shoot` or `pass` one (the kick then keeps the robot busy).
     pub fn start(&mut self, action: usize, tick: Tick, persist: u32) {
         self.action = action;
-        let ticks = if action == SHOOT {
+        let ticks = if action == SHOOT || action == PASS {
             1
         } else {
             u64::from(persist.max(1))

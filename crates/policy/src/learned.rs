@@ -25,7 +25,10 @@ use naosoccer_proto::{Action, Observation, Tick};
 use serde::{Deserialize, Serialize};
 
 use crate::actions::MASKED_LOGIT;
-use crate::actions::{argmax, sample, sample_uniform, DecisionConfig, Hold, ACTIONS, SHOOT};
+use crate::actions::{
+    action_count, argmax, pass_possible, sample, sample_uniform, DecisionConfig, Hold, ACTIONS,
+    PASS, SHOOT,
+};
 use crate::mlp::{Activation, Mlp, Weights};
 use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION_LATEST};
 use crate::PolicyError;
@@ -184,6 +187,12 @@ pub struct LearnedPolicy {
     decision: Option<DecisionConfig>,
     /// Per robot (match seed, team, player) decision state.
     holds: BTreeMap<(u64, usize, usize), Hold>,
+    /// Outputs per row: 5, or 6 for a team trained with `pass`.
+    actions: usize,
+    /// Per row of the decision in progress: whether `pass` is possible
+    /// (filled from the observations by `act_matches`; a row beyond it
+    /// cannot pass).
+    pass_ok: Vec<bool>,
 }
 
 impl std::fmt::Debug for LearnedPolicy {
@@ -313,12 +322,20 @@ impl LearnedPolicy {
     ) -> Result<LearnedPolicy, PolicyError> {
         let scale = cfg.scale();
         let dim = scale.dim();
+        let actions = action_count(cfg.decision());
+        if actions > ACTIONS && cfg.algo != Algo::Ppo {
+            return Err(PolicyError::Weights {
+                name: "q*".into(),
+                reason: "the `pass` action is PPO's only; this DQN run's configuration asks for it"
+                    .into(),
+            });
+        }
         let check = |m: Mlp, prefix: &str| -> Result<Mlp, PolicyError> {
-            if m.input() != dim || m.output() != ACTIONS {
+            if m.input() != dim || m.output() != actions {
                 return Err(PolicyError::Weights {
                     name: format!("{prefix}.*"),
                     reason: format!(
-                        "a network {} -> {}, expected {dim} -> {ACTIONS} (observation layout v{})",
+                        "a network {} -> {}, expected {dim} -> {actions} (observation layout v{})",
                         m.input(),
                         m.output(),
                         cfg.obs_version
@@ -358,6 +375,8 @@ impl LearnedPolicy {
             keys: Vec::new(),
             decision: cfg.decision(),
             holds: BTreeMap::new(),
+            actions,
+            pass_ok: Vec::new(),
         })
     }
 
@@ -410,9 +429,11 @@ impl LearnedPolicy {
         let mut feats = std::mem::take(&mut self.feats);
         let mut players = std::mem::take(&mut self.players);
         let mut keys = std::mem::take(&mut self.keys);
+        let mut pass_ok = std::mem::take(&mut self.pass_ok);
         feats.clear();
         players.clear();
         keys.clear();
+        pass_ok.clear();
         // Rows that decide now: (index into out, hold key, tick).
         let mut deciding: Vec<(usize, (u64, usize, usize), Tick)> = Vec::with_capacity(n);
         let mut i = 0;
@@ -434,6 +455,9 @@ impl LearnedPolicy {
                     let row = feats.len();
                     feats.resize(row + OBS_DIM, 0.0);
                     self.scale.encode(o, &mut feats[row..row + OBS_DIM]);
+                    if self.actions > PASS {
+                        pass_ok.push(pass_possible(o, self.scale.kick.in_reach(o)));
+                    }
                     players.push(key.2);
                     keys.push(sample_uniform(seed, key.1, key.2, o.tick));
                     deciding.push((i, key, o.tick));
@@ -441,6 +465,7 @@ impl LearnedPolicy {
                 i += 1;
             }
         }
+        self.pass_ok = pass_ok;
         if !deciding.is_empty() {
             let mut acts = vec![0usize; deciding.len()];
             self.act_rows_keyed(&feats, &players, &keys, &mut acts);
@@ -489,13 +514,16 @@ impl LearnedPolicy {
             );
         }
         self.calls += 1;
+        self.pass_ok.clear();
         self.act_rows_keyed(obs, players, &keys, out);
         self.keys = keys;
     }
 
     /// Actions for rows of observation vectors; `players[i]` is the player
     /// number of row `i` and `uniforms[i]` its draw from
-    /// [`sample_uniform`] (unused, and may be empty, when greedy).
+    /// [`sample_uniform`] (unused, and may be empty, when greedy). The rows
+    /// carry no observation to find a pass receiver in, so a team trained
+    /// with `pass` does not pass here; [`LearnedPolicy::act_matches`] does.
     pub fn act_rows_keyed(
         &mut self,
         obs: &[f32],
@@ -512,6 +540,7 @@ impl LearnedPolicy {
                     // a uniform draw among the actions allowed, which
                     // leaves out a masked `shoot` (ball out of reach).
                     let masked = masks && obs[i * OBS_DIM + IN_REACH_FEATURE] <= 0.5;
+                    // (DQN teams have the paper's five actions.)
                     let allowed = if masked { ACTIONS - 1 } else { ACTIONS };
                     let k = ((u / epsilon * allowed as f32) as usize).min(allowed - 1);
                     *a = if masked && k >= SHOOT { k + 1 } else { k };
@@ -524,14 +553,18 @@ impl LearnedPolicy {
         let n = out.len();
         let masks = self.masks_shoot();
         let shoot_ok = |i: usize| !masks || obs[i * OBS_DIM + IN_REACH_FEATURE] > 0.5;
+        let k = self.actions;
         match &self.model {
             Model::Ppo(actor) => {
                 actor.forward(obs, n, OBS_DIM, &mut self.out);
                 let sample_it = self.mode == ActMode::Sample;
                 for (i, o) in out.iter_mut().enumerate() {
-                    let row = &mut self.out[i * ACTIONS..(i + 1) * ACTIONS];
+                    let row = &mut self.out[i * k..(i + 1) * k];
                     if !shoot_ok(i) {
                         row[SHOOT] += MASKED_LOGIT;
+                    }
+                    if k > PASS && !self.pass_ok.get(i).copied().unwrap_or(false) {
+                        row[PASS] += MASKED_LOGIT;
                     }
                     *o = if sample_it {
                         softmax(row);
@@ -557,7 +590,7 @@ impl LearnedPolicy {
                     }
                     net.forward(&self.rows, idx.len(), OBS_DIM, &mut self.out);
                     for (j, &i) in idx.iter().enumerate() {
-                        let row = &mut self.out[j * ACTIONS..(j + 1) * ACTIONS];
+                        let row = &mut self.out[j * k..(j + 1) * k];
                         if !shoot_ok(i) {
                             row[SHOOT] = f32::NEG_INFINITY;
                         }
@@ -570,7 +603,7 @@ impl LearnedPolicy {
 
     /// The raw network outputs for the rows of `obs` (each [`OBS_DIM`]
     /// wide): PPO's action logits, or DQN's Q-values (of the network of
-    /// player `player`), `n * 5` values.
+    /// player `player`), `n * actions()` values.
     pub fn outputs(&self, obs: &[f32], player: usize) -> Vec<f32> {
         let n = obs.len() / OBS_DIM;
         let mut out = Vec::new();
@@ -583,17 +616,43 @@ impl LearnedPolicy {
     }
 
     /// The action probabilities of a PPO team for the rows of `obs`
-    /// (softmax of the logits, `shoot` masked as in play), `n * 5` values.
+    /// (softmax of the logits, `shoot` masked as in play), `n * actions()`
+    /// values. `pass` is not masked here (the rows carry no observation to
+    /// find a receiver in); [`LearnedPolicy::probabilities_for`] masks it.
     pub fn probabilities(&self, obs: &[f32]) -> Vec<f32> {
+        self.probabilities_masked(obs, &[])
+    }
+
+    /// [`LearnedPolicy::probabilities`] for observations, with every mask
+    /// applied as in play (`pass` too).
+    pub fn probabilities_for(&self, obs: &[Observation]) -> Vec<f32> {
+        let mut feats = vec![0.0; obs.len() * OBS_DIM];
+        let mut pass_ok = Vec::with_capacity(obs.len());
+        for (o, row) in obs.iter().zip(feats.chunks_exact_mut(OBS_DIM)) {
+            self.scale.encode(o, row);
+            pass_ok.push(pass_possible(o, self.scale.kick.in_reach(o)));
+        }
+        self.probabilities_masked(&feats, &pass_ok)
+    }
+
+    fn probabilities_masked(&self, obs: &[f32], pass_ok: &[bool]) -> Vec<f32> {
         let mut p = self.outputs(obs, 0);
         let masks = self.masks_shoot();
-        for (i, row) in p.chunks_exact_mut(ACTIONS).enumerate() {
+        for (i, row) in p.chunks_exact_mut(self.actions).enumerate() {
             if masks && obs[i * OBS_DIM + IN_REACH_FEATURE] <= 0.5 {
                 row[SHOOT] += MASKED_LOGIT;
+            }
+            if self.actions > PASS && !pass_ok.is_empty() && !pass_ok[i] {
+                row[PASS] += MASKED_LOGIT;
             }
             softmax(row);
         }
         p
+    }
+
+    /// How many actions the team chooses among: 5, or 6 with `pass`.
+    pub fn actions(&self) -> usize {
+        self.actions
     }
 
     pub fn scale(&self) -> ObsScale {

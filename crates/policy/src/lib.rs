@@ -23,7 +23,7 @@ pub mod obs;
 
 use naosoccer_proto::Observation;
 
-pub use actions::{DecisionConfig, ACTIONS, SHOOT, STAY};
+pub use actions::{DecisionConfig, ACTIONS, MAX_ACTIONS, PASS, SHOOT, STAY};
 pub use error::PolicyError;
 pub use learned::{
     is_learned_spec, load_policy, load_policy_for_match, ActMode, Algo, LearnedPolicy, PlayConfig,

@@ -174,6 +174,18 @@ impl Match {
             } else {
                 sim_command(a)
             };
+            if cmd == SimCommand::Pass && !self.sim.snapshot().robots[i].kicking {
+                // The receiver is chosen from the kicker's observation, as a
+                // client would choose it (`proto::pass_receiver`).
+                let robot = RobotId::from_index(i).expect("a robot index");
+                let obs = self.observe(robot.team(), robot.player());
+                let target = naosoccer_proto::pass_receiver(&obs).map(|j| {
+                    let r =
+                        &self.sim.snapshot().robots[robot.team().index() * PLAYERS_PER_TEAM + j];
+                    [r.pos[0], r.pos[1]]
+                });
+                self.sim.set_pass_target(i, target);
+            }
             self.sim.set_command(i, cmd);
         }
         let potential_before = self.potentials();
@@ -748,6 +760,7 @@ fn sim_command(a: Action) -> SimCommand {
         Action::TurnRight => SimCommand::TurnRight,
         Action::Shoot => SimCommand::Shoot,
         Action::Stay => SimCommand::Stay,
+        Action::Pass => SimCommand::Pass,
     }
 }
 

@@ -1134,3 +1134,53 @@ fn ahead_pays_a_robot_ahead_of_the_ball_while_its_team_has_it() {
     cfg.reward.ahead_max = cfg.reward.ahead_min;
     assert!(Match::new(&cfg, 1).is_err());
 }
+
+/// A kicker at (-1, 0) facing +x with the ball at its feet, one teammate at
+/// `mate` facing the ball; returns the tick's events over 8 s of `action`
+/// (held until the kick) then `stay`, and the ball's first velocity after
+/// the kick.
+fn kick_with(action: Action, mate: (f32, f32)) -> (Vec<Event>, [f32; 3]) {
+    let mut m = new_match(8);
+    clear_the_pitch(&mut m);
+    let (a, b) = (robot(Team::Blue, 1), robot(Team::Blue, 2));
+    m.sim_mut().place_robot(a.index(), -1.0, 0.0, 0.0);
+    let facing = (0.0 - mate.1).atan2(-0.82 - mate.0);
+    m.sim_mut().place_robot(b.index(), mate.0, mate.1, facing);
+    m.sim_mut().place_ball(-0.82, 0.0);
+    m.step(&STAY);
+    assert_eq!(m.controller(), Some(a));
+    let mut kick = STAY;
+    kick[a.index()] = action;
+    let mut events = run_until(&mut m, &kick, 10, |_, ev| {
+        ev.iter().any(|e| matches!(e, Event::Kick { .. }))
+    });
+    let vel = m.sim().snapshot().ball.vel;
+    events.extend(run_until(&mut m, &STAY, 80, |_, _| false));
+    (events, vel)
+}
+
+#[test]
+fn pass_kicks_toward_the_receiver_the_protocol_names() {
+    // 2.2 m away, 0.5 rad to the left of the kicker's heading: in the cone.
+    let mate = (-0.82 + 2.2 * 0.5f32.cos(), 2.2 * 0.5f32.sin());
+    let (events, v) = kick_with(Action::Pass, mate);
+    let dir = v[1].atan2(v[0]);
+    assert!((dir - 0.5).abs() < 0.12, "ball sent at {dir} rad, {v:?}");
+    // Slower than a shot: it should roll about 0.5 m past the receiver.
+    let speed = v[0].hypot(v[1]);
+    assert!(speed > 1.5 && speed < 2.6, "pass speed {speed}");
+    assert!(
+        events
+            .iter()
+            .any(|e| matches!(e, Event::Pass { from, to, .. }
+            if *from == robot(Team::Blue, 1) && *to == robot(Team::Blue, 2))),
+        "{events:?}"
+    );
+    // The same teammate, a shot instead: straight ahead, no pass.
+    let (events, v) = kick_with(Action::Shoot, mate);
+    assert!(v[1].abs() < 0.3 * v[0], "{v:?}");
+    assert!(!events.iter().any(|e| matches!(e, Event::Pass { .. })));
+    // No teammate in the cone (behind the kicker): a pass is a shot.
+    let (_, v) = kick_with(Action::Pass, (-2.5, 0.5));
+    assert!(v[1].abs() < 0.3 * v[0] && v[0] > 2.6, "{v:?}");
+}

@@ -57,7 +57,15 @@ pub enum Command {
     /// Stand still (and resist pushes with the bounded drive force).
     #[default]
     Stay,
+    /// A kick as `Shoot`, swung from the ball toward the point last given
+    /// by [`Sim::set_pass_target`] (along the heading if none), as fast as
+    /// rolls the ball [`PASS_OVERSHOOT`] metres past that point.
+    Pass,
 }
+
+/// How far past its target point a `Pass` kick rolls the ball (metres), so
+/// that it reaches the receiver still moving.
+pub const PASS_OVERSHOOT: f32 = 0.5;
 
 /// Bodies as they are after the last step or placement.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

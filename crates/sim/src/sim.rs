@@ -36,6 +36,10 @@ struct Ctrl {
     /// The controller is off meanwhile; `fallen` follows once the tilt
     /// passes `fall_tilt` (or never, if the robot catches itself).
     stumble: Option<(f32, f32, u64)>,
+    /// Where a `Pass` kick aims (world frame), as last set.
+    pass_target: Option<[f32; 2]>,
+    /// The point the kick in progress aims at (a `Pass`), if any.
+    kick_aim: Option<[f32; 2]>,
 }
 
 impl Default for Ctrl {
@@ -48,6 +52,8 @@ impl Default for Ctrl {
             speed_factor: 1.0,
             last_touch: None,
             stumble: None,
+            pass_target: None,
+            kick_aim: None,
         }
     }
 }
@@ -156,6 +162,13 @@ impl Sim {
         self.snapshot.robots[robot].command = cmd;
     }
 
+    /// The point (world frame, metres) robot `robot`'s next `Pass` kick
+    /// aims at; `None`: along its heading, as `Shoot`. A kick in progress
+    /// keeps the aim it started with. Panics if `robot >= ROBOTS`.
+    pub fn set_pass_target(&mut self, robot: usize, target: Option<[f32; 2]>) {
+        self.ctrl[robot].pass_target = target;
+    }
+
     /// The last snapshot (after the last step or placement).
     pub fn snapshot(&self) -> &Snapshot {
         &self.snapshot
@@ -222,15 +235,19 @@ impl Sim {
             if c.fallen {
                 continue;
             }
-            if c.kick_phase.is_none() && c.command == Command::Shoot {
+            if c.kick_phase.is_none() && matches!(c.command, Command::Shoot | Command::Pass) {
                 c.kick_phase = Some(0);
+                c.kick_aim = match c.command {
+                    Command::Pass => c.pass_target,
+                    _ => None,
+                };
             }
             let (target_v, target_w) = match (c.kick_phase, c.command) {
                 (Some(_), _) => (0.0, 0.0),
                 (None, Command::Forward) => (cfg.walk_speed * c.speed_factor, c.drift),
                 (None, Command::TurnLeft) => (0.0, cfg.turn_speed),
                 (None, Command::TurnRight) => (0.0, -cfg.turn_speed),
-                (None, Command::Stay | Command::Shoot) => (0.0, 0.0),
+                (None, Command::Stay | Command::Shoot | Command::Pass) => (0.0, 0.0),
             };
             if let Some(phase) = c.kick_phase.as_mut() {
                 *phase += 1;
@@ -480,6 +497,11 @@ impl Sim {
             let (x, y, since) = c.stumble.unwrap_or((0.0, 0.0, u64::MAX));
             h.f32s(&[x, y]);
             h.u64(since);
+            // Only a pass changes these, so matches without one keep the
+            // hashes they had before `Pass` existed.
+            for aim in [c.pass_target, c.kick_aim].into_iter().flatten() {
+                h.f32s(&aim);
+            }
         }
         for b in self.rng.get_seed() {
             h.byte(b);
@@ -525,8 +547,20 @@ impl Sim {
         // velocity across the swing stays. A ball moving away faster than
         // the foot is not reached.
         let e = cfg.ball_restitution;
-        let foot = cfg.kick_speed * (1.0 + cfg.kick_speed_noise * speed_err) / (1.0 + e);
-        let dir = heading + cfg.kick_angle_noise * angle_err;
+        // A pass: toward its target, as fast as a ball slowed only by the
+        // linear damping needs to roll PASS_OVERSHOOT past it (never faster
+        // than a shot).
+        let (speed, aim) = match self.ctrl[i].kick_aim {
+            Some([x, y]) => {
+                let b = self.world.bodies[self.ball].translation();
+                let (dx, dy) = (x - b.x, y - b.y);
+                let need = cfg.ball_linear_damping * (dx.hypot(dy) + crate::PASS_OVERSHOOT);
+                (need.min(cfg.kick_speed), dy.atan2(dx))
+            }
+            None => (cfg.kick_speed, heading),
+        };
+        let foot = speed * (1.0 + cfg.kick_speed_noise * speed_err) / (1.0 + e);
+        let dir = aim + cfg.kick_angle_noise * angle_err;
         let n = Vec3::new(dir.cos(), dir.sin(), 0.0);
         let ball = &mut self.world.bodies[self.ball];
         let v = ball.linvel();

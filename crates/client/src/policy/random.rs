@@ -1,6 +1,7 @@
-//! A uniformly random action every tick. Each robot has its own ChaCha stream
-//! seeded from the match seed and its robot id, so a match is repeatable and
-//! robots do not mirror each other.
+//! A uniformly random one of the paper's five actions every tick (never
+//! `pass`). Each robot has its own ChaCha stream seeded from the match seed
+//! and its robot id, so a match is repeatable and robots do not mirror each
+//! other.
 
 use naosoccer_proto::{Action, Observation, RobotId};
 use rand::{Rng, SeedableRng};
@@ -24,7 +25,7 @@ impl RandomPolicy {
 
 impl Policy for RandomPolicy {
     fn act(&mut self, _obs: &Observation) -> Action {
-        Action::ALL[self.rng.random_range(0..Action::ALL.len())]
+        Action::PAPER[self.rng.random_range(0..Action::PAPER.len())]
     }
 
     fn name(&self) -> &str {
@@ -69,7 +70,7 @@ mod tests {
         assert_ne!(run(7, 3), run(8, 3));
         // Every action comes up.
         let a = run(1, 0);
-        for act in Action::ALL {
+        for act in Action::PAPER {
             assert!(a.contains(&act), "{act:?} never drawn");
         }
     }
