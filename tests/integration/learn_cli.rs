@@ -273,11 +273,10 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
             "4",
             "--minutes",
             "0.1",
-            "--out",
         ]
     };
     let mut a = args("ppo", "team");
-    a.extend(["--init-from", &shipped, run_s]);
+    a.extend(["--init-from", &shipped, "--out", run_s]);
     let out = naosoccer(&a);
     assert!(
         out.status.success(),
@@ -309,7 +308,7 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
     let other_s = other.to_str().unwrap();
     for (algo, preset, says) in [("dqn", "team", "PPO"), ("ppo", "cleanrl", "team preset")] {
         let mut a = args(algo, preset);
-        a.push(other_s);
+        a.extend(["--out", other_s]);
         let out = naosoccer(&a);
         assert!(
             !out.status.success(),
@@ -327,7 +326,7 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
         "{}/assets/policies/ppo-paper-seed1",
         env!("CARGO_MANIFEST_DIR")
     );
-    a.extend(["--init-from", &paper, other_s]);
+    a.extend(["--init-from", &paper, "--out", other_s]);
     let out = naosoccer(&a);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);

@@ -553,17 +553,17 @@ impl LearnedPolicy {
         let n = out.len();
         let masks = self.masks_shoot();
         let shoot_ok = |i: usize| !masks || obs[i * OBS_DIM + IN_REACH_FEATURE] > 0.5;
-        let k = self.actions;
+        let na = self.actions;
         match &self.model {
             Model::Ppo(actor) => {
                 actor.forward(obs, n, OBS_DIM, &mut self.out);
                 let sample_it = self.mode == ActMode::Sample;
                 for (i, o) in out.iter_mut().enumerate() {
-                    let row = &mut self.out[i * k..(i + 1) * k];
+                    let row = &mut self.out[i * na..(i + 1) * na];
                     if !shoot_ok(i) {
                         row[SHOOT] += MASKED_LOGIT;
                     }
-                    if k > PASS && !self.pass_ok.get(i).copied().unwrap_or(false) {
+                    if na > PASS && !self.pass_ok.get(i).copied().unwrap_or(false) {
                         row[PASS] += MASKED_LOGIT;
                     }
                     *o = if sample_it {
@@ -590,7 +590,7 @@ impl LearnedPolicy {
                     }
                     net.forward(&self.rows, idx.len(), OBS_DIM, &mut self.out);
                     for (j, &i) in idx.iter().enumerate() {
-                        let row = &mut self.out[j * k..(j + 1) * k];
+                        let row = &mut self.out[j * na..(j + 1) * na];
                         if !shoot_ok(i) {
                             row[SHOOT] = f32::NEG_INFINITY;
                         }
