@@ -663,7 +663,6 @@ impl Match {
     }
 }
 
-/// The pass bonus of `RewardConfig::pass`, for a long enough forward pass.
 /// Each robot's horizontal distance to the ball.
 fn ball_distances(snap: &naosoccer_sim::Snapshot) -> [f32; ROBOTS] {
     let [bx, by, _] = snap.ball.pos;
@@ -685,6 +684,7 @@ fn nearer_ball(dist: &[f32; ROBOTS], j: usize, i: usize) -> bool {
     dist[j] < dist[i] || (dist[j] == dist[i] && j < i)
 }
 
+/// The pass bonus of `RewardConfig::pass`, for a long enough forward pass.
 fn pass_bonus(w: &RewardConfig, shaping: &mut [f32; ROBOTS], p: PassMade) {
     if w.pass <= 0.0 {
         return;
