@@ -243,6 +243,98 @@ fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
     }
 }
 
+/// `train --pass-action --support-action --init-from`: a shipped team
+/// seeds a run with `pass` and `support`; the run records both and plays
+/// over the socket-free eval path; `--support-action` alone is refused, as
+/// is the support action without the team preset.
+#[cfg(feature = "train")]
+#[test]
+fn support_action_runs_start_from_a_shipped_team_and_play() {
+    let run = dir("cli_support_action");
+    let run_s = run.to_str().unwrap();
+    let shipped = format!(
+        "{}/assets/policies/ppo-team-seed2",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let base = [
+        "train",
+        "--algo",
+        "ppo",
+        "--preset",
+        "team",
+        "--obs-version",
+        "3",
+        "--steps",
+        "2048",
+        "--seed",
+        "6",
+        "--matches",
+        "4",
+        "--minutes",
+        "0.1",
+    ];
+    let mut a = base.to_vec();
+    a.extend([
+        "--pass-action",
+        "--support-action",
+        "--init-from",
+        &shipped,
+        "--out",
+        run_s,
+    ]);
+    let out = naosoccer(&a);
+    assert!(
+        out.status.success(),
+        "train failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap();
+    assert_eq!(config["ppo"]["decision"]["pass"], true);
+    assert_eq!(config["ppo"]["decision"]["support"], true);
+    let out = naosoccer(&[
+        "eval",
+        "--blue",
+        &format!("ppo:{run_s}"),
+        "--red",
+        "scripted",
+        "--matches",
+        "1",
+        "--minutes",
+        "0.2",
+    ]);
+    assert!(
+        out.status.success(),
+        "eval failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let other = dir("cli_support_action_refused");
+    let other_s = other.to_str().unwrap();
+    let mut a = base.to_vec();
+    a.extend(["--support-action", "--out", other_s]);
+    let out = naosoccer(&a);
+    assert!(
+        !out.status.success(),
+        "--support-action alone must be refused"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--pass-action"), "{err}");
+    let mut a = base.to_vec();
+    a[4] = "cleanrl";
+    a.extend(["--pass-action", "--support-action", "--out", other_s]);
+    let out = naosoccer(&a);
+    assert!(
+        !out.status.success(),
+        "cleanrl must refuse --support-action"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--support-action") && err.contains("team preset"),
+        "{err}"
+    );
+}
+
 /// `train --pass-action --init-from`: a shipped team (five actions) seeds a
 /// run with the sixth action, `pass`; the run records both, trains, and
 /// plays; DQN and non-team presets refuse the flags by name.

@@ -26,13 +26,14 @@ use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEA
 use naosoccer_referee::rules::segment_distance;
 use naosoccer_referee::{Match, MatchConfig};
 
-const NAMES: [&str; 6] = [
+const NAMES: [&str; 7] = [
     "forward",
     "turn_left",
     "turn_right",
     "shoot",
     "stay",
     "pass",
+    "support",
 ];
 /// The team probed: a trained one, or a built-in one robot by robot.
 enum Blue {
@@ -226,11 +227,22 @@ fn main() {
                 .map(|p| m.observe(Team::Blue, p))
                 .collect();
             let mut acts = [Action::Stay; ROBOTS];
+            // The team's choices (a learned team's `support` is counted as
+            // such; what it walks with goes in `acts`).
+            let mut chosen = [0usize; PLAYERS_PER_TEAM];
             match &mut team {
-                Blue::Learned(t) => t.act_batch(&blue, &mut acts[..PLAYERS_PER_TEAM]),
+                Blue::Learned(t) => {
+                    t.act_matches(&[(m.seed(), &blue)], &mut chosen);
+                    for (p, o) in blue.iter().enumerate() {
+                        acts[p] = t.action(chosen[p], o);
+                    }
+                }
                 Blue::Builtin(_, robots) => {
                     for ((a, r), o) in acts.iter_mut().zip(robots.iter_mut()).zip(&blue) {
                         *a = r.act(o);
+                    }
+                    for (c, a) in chosen.iter_mut().zip(&acts) {
+                        *c = a.index();
                     }
                 }
             }
@@ -239,13 +251,14 @@ fn main() {
                 // nothing. A movement held for a few ticks counts each tick.
                 if is_free(o) {
                     let in_reach = reach.in_reach(o);
-                    counts[kind(o, in_reach)][acts[p].index()] += 1;
+                    counts[kind(o, in_reach)][chosen[p]] += 1;
                     let open = in_reach && pass_on(o);
                     if open && force {
                         acts[p] = Action::Shoot;
+                        chosen[p] = Action::Shoot.index();
                     }
                     if open {
-                        pass_counts[acts[p].index()] += 1;
+                        pass_counts[chosen[p]] += 1;
                     }
                     if matches!(acts[p], Action::Shoot | Action::Pass) {
                         aimed_at[p] = open;

@@ -167,6 +167,7 @@ impl DqnConfig {
                 persist: 3,
                 mask_shoot: true,
                 pass: false,
+                support: false,
             }),
         }
     }

@@ -16,6 +16,7 @@ use naosoccer_referee::{Match, MatchConfig};
 
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
+use naosoccer_policy::to_action;
 pub use naosoccer_policy::BatchActor;
 
 /// Who plays against the learner.
@@ -687,12 +688,16 @@ impl Slot {
         let mut joint = [Action::Stay; ROBOTS];
         let own = self.team.index() * PLAYERS_PER_TEAM;
         let other = self.team.other().index() * PLAYERS_PER_TEAM;
+        // A network's `support` becomes the step toward the robot's support
+        // spot, as in play (`LearnedPolicy::action`).
+        let field = self.m.field();
+        let half = [field.half_length, field.half_width];
         for (k, &p) in env.learners.iter().enumerate() {
-            joint[own + p] = Action::from_index(actions[k]).unwrap_or(Action::Stay);
+            joint[own + p] = to_action(actions[k], &self.obs[own + p], half);
         }
         if let Some(opp) = opp {
             for p in 0..PLAYERS_PER_TEAM {
-                joint[other + p] = Action::from_index(opp[p]).unwrap_or(Action::Stay);
+                joint[other + p] = to_action(opp[p], &self.obs[other + p], half);
             }
         }
         for (i, policy) in self.policies.iter_mut().enumerate() {

@@ -13,7 +13,7 @@ pub enum LearnError {
     /// Loading or saving files (I/O, JSON, policy specs, observation
     /// layouts, weights): the policy crate's errors, shared rather than
     /// repeated here.
-    #[error("{0}")]
+    #[error(transparent)]
     Policy(#[from] PolicyError),
     #[error("libtorch: {0}")]
     Torch(#[from] tch::TchError),
@@ -27,14 +27,14 @@ impl LearnError {
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> LearnError {
         LearnError::Policy(PolicyError::Io {
             path: path.into(),
-            source,
+            error: source,
         })
     }
 
     pub(crate) fn json(path: impl Into<PathBuf>, source: serde_json::Error) -> LearnError {
         LearnError::Policy(PolicyError::Json {
             path: path.into(),
-            source,
+            error: source,
         })
     }
 }

@@ -182,6 +182,7 @@ impl PpoConfig {
                 persist: 3,
                 mask_shoot: true,
                 pass: false,
+                support: false,
             }),
         }
     }
@@ -199,7 +200,8 @@ impl PpoConfig {
         self.decision.is_some_and(|d| d.mask_shoot)
     }
 
-    /// How many actions the actor chooses among: 5, or 6 with `pass`.
+    /// How many actions the actor chooses among: 5, 6 with `pass`, 7 with
+    /// `support` too.
     pub fn actions(&self) -> usize {
         action_count(self.decision)
     }

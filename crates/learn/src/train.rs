@@ -275,6 +275,12 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             "the pass action is for PPO (--algo ppo --preset team) only".into(),
         ));
     }
+    let decisions = [cfg.ppo.decision, cfg.dqn.decision];
+    if decisions.iter().flatten().any(|d| d.support && !d.pass) {
+        return Err(LearnError::Config(
+            "the support action comes with the pass action (--pass-action --support-action)".into(),
+        ));
+    }
     if cfg.init_from.is_some() && (cfg.algo != Algo::Ppo || cfg.ppo.decision.is_none()) {
         return Err(LearnError::Config(
             "--init-from starts PPO team-preset runs (--algo ppo --preset team) only".into(),
@@ -743,6 +749,7 @@ fn train_ppo_decisions(
 /// is at first as likely as `shoot` where both are possible.
 pub fn init_weights(ppo: &mut Ppo, path: &Path) -> Result<(), LearnError> {
     use crate::ppo::{PASS, SHOOT};
+    use naosoccer_policy::SUPPORT;
     let file = if path.is_dir() {
         path.join("final.safetensors")
     } else {
@@ -763,17 +770,32 @@ pub fn init_weights(ppo: &mut Ppo, path: &Path) -> Result<(), LearnError> {
             .ok_or_else(|| bad(format!("no tensor {name:?} (a run of another shape?)")))?;
         let (want, got) = (var.size(), src.size());
         tch::no_grad(|| -> Result<(), LearnError> {
+            // The actor's output layer may gain rows: `pass` (a copy of
+            // `shoot`) and `support` (a copy of `forward`, its bias lowered
+            // by SUPPORT_INIT_BIAS so that it starts rarer than `forward`).
+            let widen = name.starts_with("actor.")
+                && !want.is_empty()
+                && want[1..] == got[1..]
+                && (got[0] == PASS as i64 || got[0] == SUPPORT as i64)
+                && (want[0] == PASS as i64 + 1 || want[0] == SUPPORT as i64 + 1)
+                && want[0] > got[0];
             if want == got {
                 var.copy_(src);
-            } else if name.starts_with("actor.")
-                && !want.is_empty()
-                && want[0] == PASS as i64 + 1
-                && got[0] == PASS as i64
-                && want[1..] == got[1..]
-            {
-                var.narrow(0, 0, PASS as i64).copy_(src);
-                var.narrow(0, PASS as i64, 1)
-                    .copy_(&src.narrow(0, SHOOT as i64, 1));
+            } else if widen {
+                var.narrow(0, 0, got[0]).copy_(src);
+                if got[0] == PASS as i64 {
+                    var.narrow(0, PASS as i64, 1)
+                        .copy_(&src.narrow(0, SHOOT as i64, 1));
+                }
+                if want[0] == SUPPORT as i64 + 1 {
+                    let forward = src.narrow(0, naosoccer_policy::actions::FORWARD as i64, 1);
+                    let row = if want.len() == 1 {
+                        forward - f64::from(SUPPORT_INIT_BIAS)
+                    } else {
+                        forward.shallow_clone()
+                    };
+                    var.narrow(0, SUPPORT as i64, 1).copy_(&row);
+                }
             } else {
                 return Err(bad(format!(
                     "{name} is {got:?} there, the run's network needs {want:?}"
@@ -784,6 +806,10 @@ pub fn init_weights(ppo: &mut Ppo, path: &Path) -> Result<(), LearnError> {
     }
     Ok(())
 }
+
+/// How much lower `support`'s bias starts than `forward`'s when
+/// `--init-from` widens an actor: e^-1, about 2.7 times less likely.
+pub const SUPPORT_INIT_BIAS: f32 = 1.0;
 
 /// Where a decision-level run stands at a checkpoint (an episode boundary):
 /// with the weights (`step-N.safetensors`) and the optimiser's moments

@@ -1146,3 +1146,71 @@ fn init_from_widens_the_actor_for_the_pass_action() {
         .to_string();
     assert!(err.contains("no such weights file"), "{err}");
 }
+
+/// `--init-from` with `support`: a five-action team and a six-action
+/// (`pass`) one both seed a seven-action actor. The old logits carry over,
+/// `pass` starts as `shoot`, and `support` as `forward` lowered by
+/// `SUPPORT_INIT_BIAS`; a wider source is refused.
+#[test]
+fn init_from_widens_the_actor_for_the_support_action() {
+    use naosoccer_learn::ppo::{Ppo, PpoConfig, Preset, PASS, SHOOT};
+    use naosoccer_learn::train::{init_weights, SUPPORT_INIT_BIAS};
+    use naosoccer_policy::SUPPORT;
+    let _g = torch_lock();
+    let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
+    let five = PpoConfig::preset(Preset::Team);
+    let mut six = five.clone();
+    six.decision.as_mut().unwrap().pass = true;
+    let mut seven = six.clone();
+    seven.decision.as_mut().unwrap().support = true;
+    assert_eq!(seven.actions(), 7);
+    let dir = out_dir("init_from_support");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    let n = 5;
+    let rows: Vec<f32> = (0..n * OBS_DIM)
+        .map(|_| rng.random_range(-1.0..1.0))
+        .collect();
+    let logits = |p: &Ppo| -> Vec<f32> {
+        let t = tch::no_grad(|| p.net.logits(&p.net.actor_input(&rows, n)));
+        let k = t.size()[1] as usize;
+        let mut v = vec![0.0f32; n * k];
+        t.copy_data(&mut v, n * k);
+        v
+    };
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-5;
+    for (from, k) in [(five, 5usize), (six, 6)] {
+        let src = Ppo::new(from, &scale, 4).unwrap();
+        let file = dir.join(format!("from{k}.safetensors"));
+        naosoccer_learn::policy::save_stores(&[&src.net.vs], &file).unwrap();
+        let before = logits(&src);
+        let mut dst = Ppo::new(seven.clone(), &scale, 4).unwrap();
+        init_weights(&mut dst, &file).unwrap();
+        let after = logits(&dst);
+        for i in 0..n {
+            for a in 0..k {
+                assert!(
+                    close(after[i * 7 + a], before[i * k + a]),
+                    "{k}: row {i}, action {a}"
+                );
+            }
+            if k == 5 {
+                assert!(close(after[i * 7 + PASS], before[i * 5 + SHOOT]), "row {i}");
+            }
+            assert!(
+                close(after[i * 7 + SUPPORT], before[i * k] - SUPPORT_INIT_BIAS),
+                "{k}: row {i}: support {} forward {}",
+                after[i * 7 + SUPPORT],
+                before[i * k]
+            );
+        }
+        // Seven outputs do not narrow to five or six.
+        if k == 5 {
+            let mut back = Ppo::new(PpoConfig::preset(Preset::Team), &scale, 4).unwrap();
+            let wide = dir.join("from7.safetensors");
+            naosoccer_learn::policy::save_stores(&[&dst.net.vs], &wide).unwrap();
+            let err = init_weights(&mut back, &wide).unwrap_err().to_string();
+            assert!(err.contains("needs [5"), "{err}");
+        }
+    }
+}

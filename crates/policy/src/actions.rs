@@ -3,19 +3,46 @@
 //! the inverse-CDF sampler. Training (crates/learn) and play share them, so
 //! a team decides in play exactly as it did in training.
 
-use naosoccer_proto::{Observation, Tick};
+use naosoccer_proto::{Action, Observation, Tick};
 use serde::{Deserialize, Serialize};
 
 /// The paper's discrete actions, in `proto::Action::from_index` order:
 /// forward, turn left, turn right, shoot, stay. A team trained with
-/// [`DecisionConfig::pass`] has a sixth, `pass` ([`PASS`]).
+/// [`DecisionConfig::pass`] has a sixth, `pass` ([`PASS`]), and one trained
+/// with [`DecisionConfig::support`] a seventh, `support` ([`SUPPORT`]).
 pub const ACTIONS: usize = 5;
 
-/// The most actions a network has (the paper's five and `pass`).
-pub const MAX_ACTIONS: usize = 6;
+/// The most actions a network has (the paper's five, `pass` and `support`).
+pub const MAX_ACTIONS: usize = 7;
 
 /// Index of `pass`, the sixth action of teams trained with it.
 pub const PASS: usize = 5;
+
+/// Index of `support`, the seventh action of teams trained with it. It is
+/// not a protocol action: the team's policy turns it, every tick, into the
+/// `forward`, turn or `stay` that walks the robot to its support spot
+/// ([`support_action`]).
+pub const SUPPORT: usize = 6;
+
+/// Index of `forward`.
+pub const FORWARD: usize = 0;
+
+/// A support spot lies this far ahead of the ball, toward the opponent
+/// goal (m): the default of the reward's `support_ahead`.
+pub const SUPPORT_AHEAD: f32 = 1.5;
+/// ...and this far to the side of the ball the robot is on (m): the
+/// default of the reward's `support_side`. The spot is 1.8 m from the ball
+/// and 0.59 rad off the line toward the goal, inside the pass rule's
+/// 0.8-4 m and 0.8 rad for a kicker facing the goal.
+pub const SUPPORT_SIDE: f32 = 1.0;
+/// Within this distance of its spot (m) a supporting robot turns to face
+/// the ball instead of walking.
+pub const SUPPORT_ARRIVE: f32 = 0.3;
+/// A supporting robot walks when its spot is within this angle of its
+/// heading (rad) and turns toward it otherwise.
+pub const SUPPORT_WALK_CONE: f32 = 0.35;
+/// Arrived, it turns until the ball is within this angle of its heading (rad).
+pub const SUPPORT_FACE_CONE: f32 = 0.5;
 
 /// Index of `shoot` among the actions.
 pub const SHOOT: usize = 3;
@@ -38,17 +65,89 @@ pub struct DecisionConfig {
     /// teammate. Absent from older runs' configurations: `false`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub pass: bool,
+    /// The robots have a seventh action, `support` (needs `pass`): walk to
+    /// the support spot ahead of the ball ([`support_action`]), where a
+    /// teammate with the ball can pass to them. Always possible. Absent
+    /// from older runs' configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub support: bool,
 }
 
 impl DecisionConfig {
-    /// How many actions the networks choose among: 5, or 6 with `pass`.
+    /// How many actions the networks choose among: 5, 6 with `pass`, 7
+    /// with `pass` and `support`.
     pub fn actions(&self) -> usize {
-        if self.pass {
-            MAX_ACTIONS
-        } else {
-            ACTIONS
+        match (self.pass, self.support) {
+            (_, true) => SUPPORT + 1,
+            (true, false) => PASS + 1,
+            (false, false) => ACTIONS,
         }
     }
+}
+
+/// The protocol action a team's action index `index` stands for in the
+/// state `obs`: the index itself for the protocol's actions, the step
+/// toward the support spot for [`SUPPORT`] (on a pitch of half length and
+/// half width `half`), `stay` for anything else.
+pub fn to_action(index: usize, obs: &Observation, half: [f32; 2]) -> Action {
+    if index == SUPPORT {
+        support_action(obs, half)
+    } else {
+        Action::from_index(index).unwrap_or(Action::Stay)
+    }
+}
+
+/// The `support` action's step for the robot that received `obs`, on a
+/// pitch of half length and half width `half` (m): its support spot is
+/// [`SUPPORT_AHEAD`] ahead of the ball (toward the opponent goal, +x in the
+/// observation's frame) and [`SUPPORT_SIDE`] to the side of the ball the
+/// robot stands on, kept 0.3 m inside the lines (the reward's `support`
+/// spot). Away from the spot it turns toward it until the spot is within
+/// [`SUPPORT_WALK_CONE`] and walks; arrived, it turns to face the ball.
+/// Stateless, so it is the same step in training, in process and over the
+/// socket.
+pub fn support_action(obs: &Observation, half: [f32; 2]) -> Action {
+    let me = obs.me();
+    if me.fallen {
+        return Action::Stay;
+    }
+    let (bx, by) = (obs.ball.x, obs.ball.y);
+    let side = if me.y >= by { 1.0 } else { -1.0 };
+    let (lx, ly) = ((half[0] - 0.3).max(0.0), (half[1] - 0.3).max(0.0));
+    let spot = [
+        (bx + SUPPORT_AHEAD).clamp(-lx, lx),
+        (by + side * SUPPORT_SIDE).clamp(-ly, ly),
+    ];
+    let (dx, dy) = (spot[0] - me.x, spot[1] - me.y);
+    let (target, cone, arrived) = if dx.hypot(dy) > SUPPORT_ARRIVE {
+        ([dx, dy], SUPPORT_WALK_CONE, false)
+    } else {
+        ([bx - me.x, by - me.y], SUPPORT_FACE_CONE, true)
+    };
+    let err = wrap_angle(target[1].atan2(target[0]) - me.heading);
+    if err.abs() > cone {
+        if err > 0.0 {
+            Action::TurnLeft
+        } else {
+            Action::TurnRight
+        }
+    } else if arrived {
+        Action::Stay
+    } else {
+        Action::Forward
+    }
+}
+
+/// `a` wrapped into (-pi, pi].
+fn wrap_angle(a: f32) -> f32 {
+    let tau = std::f32::consts::TAU;
+    let mut a = a % tau;
+    if a > std::f32::consts::PI {
+        a -= tau;
+    } else if a <= -std::f32::consts::PI {
+        a += tau;
+    }
+    a
 }
 
 /// The number of actions of a team in `decision` (`None`: the paper's five).

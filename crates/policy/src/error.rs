@@ -8,17 +8,17 @@ use std::path::PathBuf;
 pub enum PolicyError {
     #[error("match: {0}")]
     Match(#[from] naosoccer_referee::MatchError),
-    #[error("{path}: {source}")]
+    // The cause is part of the message and deliberately not a `source`:
+    // error reporters that print the chain (anyhow's) would say it twice.
+    #[error("{path}: {error}")]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
-    #[error("{path}: invalid JSON: {source}")]
+    #[error("{path}: invalid JSON: {error}")]
     Json {
         path: PathBuf,
-        #[source]
-        source: serde_json::Error,
+        error: serde_json::Error,
     },
     #[error("invalid policy spec {spec:?}: {reason}")]
     Spec { spec: String, reason: String },
@@ -38,7 +38,7 @@ impl PolicyError {
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> PolicyError {
         PolicyError::Io {
             path: path.into(),
-            source,
+            error: source,
         }
     }
 }

@@ -308,9 +308,9 @@ pub fn play_matches(
             policy.act_matches(&teams, &mut acts);
             for (j, &i) in live.iter().enumerate() {
                 let team = team_of(&slots[i], is_first);
+                let base = team.index() * PLAYERS_PER_TEAM;
                 for p in 0..PLAYERS_PER_TEAM {
-                    let a =
-                        Action::from_index(acts[j * PLAYERS_PER_TEAM + p]).unwrap_or(Action::Stay);
+                    let a = policy.action(acts[j * PLAYERS_PER_TEAM + p], &slots[i].obs[base + p]);
                     slots[i].decided[team.index() * PLAYERS_PER_TEAM + p] = a;
                 }
             }

@@ -26,8 +26,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::actions::MASKED_LOGIT;
 use crate::actions::{
-    action_count, argmax, pass_possible, sample, sample_uniform, DecisionConfig, Hold, ACTIONS,
-    PASS, SHOOT,
+    action_count, argmax, pass_possible, sample, sample_uniform, to_action, DecisionConfig, Hold,
+    ACTIONS, PASS, SHOOT,
 };
 use crate::mlp::{Activation, Mlp, Weights};
 use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION_LATEST};
@@ -110,7 +110,7 @@ impl PlayConfig {
         let text = std::fs::read_to_string(path).map_err(|e| PolicyError::io(path, e))?;
         serde_json::from_str(&text).map_err(|e| PolicyError::Json {
             path: path.to_path_buf(),
-            source: e,
+            error: e,
         })
     }
 
@@ -222,6 +222,12 @@ pub fn load_policy_for_match(spec: &str, match_seed: u64) -> Result<Box<dyn Poli
 /// Where a run directory keeps its configuration and weights.
 pub fn resolve_run(path: &Path) -> Result<(PathBuf, PathBuf), PolicyError> {
     if path.extension().is_some_and(|e| e == "safetensors") {
+        if !path.is_file() {
+            return Err(PolicyError::io(
+                path,
+                std::io::Error::new(std::io::ErrorKind::NotFound, "no such weights file"),
+            ));
+        }
         // checkpoints/step-N.safetensors -> the run directory two levels up.
         let mut dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         if !dir.join("config.json").exists() {
@@ -650,9 +656,18 @@ impl LearnedPolicy {
         p
     }
 
-    /// How many actions the team chooses among: 5, or 6 with `pass`.
+    /// How many actions the team chooses among: 5, 6 with `pass`, 7 with
+    /// `support` too.
     pub fn actions(&self) -> usize {
         self.actions
+    }
+
+    /// The protocol action that action index `index` (from
+    /// [`LearnedPolicy::act_matches`]) stands for in the state `obs`: a
+    /// `support` becomes the step toward the robot's support spot
+    /// ([`crate::support_action`]).
+    pub fn action(&self, index: usize, obs: &Observation) -> Action {
+        to_action(index, obs, [self.scale.half_length, self.scale.half_width])
     }
 
     pub fn scale(&self) -> ObsScale {
@@ -692,7 +707,7 @@ impl Policy for LearnedPolicy {
         let mut out = [0usize];
         let seed = self.match_seed;
         self.act_matches(&[(seed, std::slice::from_ref(obs))], &mut out);
-        Action::from_index(out[0]).unwrap_or(Action::Stay)
+        self.action(out[0], obs)
     }
 
     fn act_batch(&mut self, obs: &[Observation], out: &mut [Action]) {
@@ -700,12 +715,31 @@ impl Policy for LearnedPolicy {
         let mut acts = vec![0usize; n];
         let seed = self.match_seed;
         self.act_matches(&[(seed, &obs[..n])], &mut acts);
-        for (o, a) in out.iter_mut().zip(acts) {
-            *o = Action::from_index(a).unwrap_or(Action::Stay);
+        for ((o, a), ob) in out.iter_mut().zip(acts).zip(obs) {
+            *o = self.action(a, ob);
         }
     }
 
     fn name(&self) -> &str {
         &self.name
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A missing weights file or run is named once, in words a user can act
+    /// on (the io error's text used to appear twice in the CLI's report).
+    #[test]
+    fn missing_runs_are_named_once() {
+        let dir = std::env::temp_dir().join("naosoccer-policy-missing-run");
+        let file = dir.join("MISSING.safetensors");
+        let err = LearnedPolicy::load(&format!("ppo:{}", file.display())).unwrap_err();
+        assert!(std::error::Error::source(&err).is_none());
+        let msg = err.to_string();
+        assert_eq!(msg, format!("{}: no such weights file", file.display()));
+        let err = LearnedPolicy::load(&format!("ppo:{}", dir.display())).unwrap_err();
+        assert!(err.to_string().contains("no final.safetensors"), "{err}");
     }
 }

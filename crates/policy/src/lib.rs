@@ -23,7 +23,9 @@ pub mod obs;
 
 use naosoccer_proto::Observation;
 
-pub use actions::{DecisionConfig, ACTIONS, MAX_ACTIONS, PASS, SHOOT, STAY};
+pub use actions::{
+    support_action, to_action, DecisionConfig, ACTIONS, MAX_ACTIONS, PASS, SHOOT, STAY, SUPPORT,
+};
 pub use error::PolicyError;
 pub use learned::{
     is_learned_spec, load_policy, load_policy_for_match, ActMode, Algo, LearnedPolicy, PlayConfig,
