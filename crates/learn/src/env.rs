@@ -12,6 +12,7 @@
 
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_referee::rules::segment_distance;
 use naosoccer_referee::{Match, MatchConfig};
 
 use crate::obs::{ObsScale, OBS_DIM};
@@ -826,7 +827,7 @@ impl Slot {
                     rng.random_range(-(half_y - 0.45)..=(half_y - 0.45)),
                 );
                 let far = (p.0 - ball.0).hypot(p.1 - ball.1) >= min;
-                if far && segment_distance(p, ball, (recv.0, recv.1)) >= lane {
+                if far && segment_distance([ball.0, ball.1], [recv.0, recv.1], [p.0, p.1]) >= lane {
                     break;
                 }
             }
@@ -886,16 +887,4 @@ impl Slot {
             }
         }
     }
-}
-
-/// Distance from `p` to the segment from `a` to `b`.
-fn segment_distance(p: (f32, f32), a: (f32, f32), b: (f32, f32)) -> f32 {
-    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p.0 - a.0 - t * dx).hypot(p.1 - a.1 - t * dy)
 }

@@ -4,6 +4,7 @@
 //! a team decides in play exactly as it did in training.
 
 use naosoccer_proto::{Action, Observation, Tick};
+use naosoccer_referee::rules::wrap_angle;
 use serde::{Deserialize, Serialize};
 
 /// The paper's discrete actions, in `proto::Action::from_index` order:
@@ -136,18 +137,6 @@ pub fn support_action(obs: &Observation, half: [f32; 2]) -> Action {
     } else {
         Action::Forward
     }
-}
-
-/// `a` wrapped into (-pi, pi].
-fn wrap_angle(a: f32) -> f32 {
-    let tau = std::f32::consts::TAU;
-    let mut a = a % tau;
-    if a > std::f32::consts::PI {
-        a -= tau;
-    } else if a <= -std::f32::consts::PI {
-        a += tau;
-    }
-    a
 }
 
 /// The number of actions of a team in `decision` (`None`: the paper's five).
