@@ -1082,6 +1082,15 @@ fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
     assert_eq!(staged, 2 * 11);
 }
 
+/// The actor's logits for `n` observation rows, row by row.
+fn actor_logits(p: &naosoccer_learn::ppo::Ppo, rows: &[f32], n: usize) -> Vec<f32> {
+    let t = tch::no_grad(|| p.net.logits(&p.net.actor_input(rows, n)));
+    let k = t.size()[1] as usize;
+    let mut v = vec![0.0f32; n * k];
+    t.copy_data(&mut v, n * k);
+    v
+}
+
 /// `--init-from`: a team trained without `pass` seeds one with it. The
 /// paper's five logits are carried over and `pass` starts as `shoot`; a
 /// network of another shape is refused by name.
@@ -1106,13 +1115,7 @@ fn init_from_widens_the_actor_for_the_pass_action() {
     let rows: Vec<f32> = (0..n * OBS_DIM)
         .map(|_| rng.random_range(-1.0..1.0))
         .collect();
-    let logits = |p: &Ppo| -> Vec<f32> {
-        let t = tch::no_grad(|| p.net.logits(&p.net.actor_input(&rows, n)));
-        let k = t.size()[1] as usize;
-        let mut v = vec![0.0f32; n * k];
-        t.copy_data(&mut v, n * k);
-        v
-    };
+    let logits = |p: &Ppo| actor_logits(p, &rows, n);
     let before = logits(&src);
     let mut dst = Ppo::new(six, &scale, 4).unwrap();
     init_weights(&mut dst, &dir).unwrap();
@@ -1171,13 +1174,7 @@ fn init_from_widens_the_actor_for_the_support_action() {
     let rows: Vec<f32> = (0..n * OBS_DIM)
         .map(|_| rng.random_range(-1.0..1.0))
         .collect();
-    let logits = |p: &Ppo| -> Vec<f32> {
-        let t = tch::no_grad(|| p.net.logits(&p.net.actor_input(&rows, n)));
-        let k = t.size()[1] as usize;
-        let mut v = vec![0.0f32; n * k];
-        t.copy_data(&mut v, n * k);
-        v
-    };
+    let logits = |p: &Ppo| actor_logits(p, &rows, n);
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-5;
     for (from, k) in [(five, 5usize), (six, 6)] {
         let src = Ppo::new(from, &scale, 4).unwrap();
