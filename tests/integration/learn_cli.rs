@@ -243,6 +243,29 @@ fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
     }
 }
 
+/// A test-sized `train` on observation layout 3: 2,048 transitions, four
+/// six-second matches.
+#[cfg(feature = "train")]
+fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> Vec<&'static str> {
+    vec![
+        "train",
+        "--algo",
+        algo,
+        "--preset",
+        preset,
+        "--obs-version",
+        "3",
+        "--steps",
+        "2048",
+        "--seed",
+        seed,
+        "--matches",
+        "4",
+        "--minutes",
+        "0.1",
+    ]
+}
+
 /// `train --pass-action --support-action --init-from`: a shipped team
 /// seeds a run with `pass` and `support`; the run records both and plays
 /// over the socket-free eval path; `--support-action` alone is refused, as
@@ -256,23 +279,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         "{}/assets/policies/ppo-team-seed2",
         env!("CARGO_MANIFEST_DIR")
     );
-    let base = [
-        "train",
-        "--algo",
-        "ppo",
-        "--preset",
-        "team",
-        "--obs-version",
-        "3",
-        "--steps",
-        "2048",
-        "--seed",
-        "6",
-        "--matches",
-        "4",
-        "--minutes",
-        "0.1",
-    ];
+    let base = short_train("ppo", "team", "6");
     let mut a = base.to_vec();
     a.extend([
         "--pass-action",
@@ -348,24 +355,9 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
         env!("CARGO_MANIFEST_DIR")
     );
     let args = |algo: &'static str, preset: &'static str| {
-        vec![
-            "train",
-            "--algo",
-            algo,
-            "--preset",
-            preset,
-            "--obs-version",
-            "3",
-            "--pass-action",
-            "--steps",
-            "2048",
-            "--seed",
-            "5",
-            "--matches",
-            "4",
-            "--minutes",
-            "0.1",
-        ]
+        let mut a = short_train(algo, preset, "5");
+        a.push("--pass-action");
+        a
     };
     let mut a = args("ppo", "team");
     a.extend(["--init-from", &shipped, "--out", run_s]);
