@@ -106,6 +106,12 @@ pub struct TrainArgs {
     /// `shoot`, `support` as `forward` made about 2.7 times less likely.
     #[arg(long, value_name = "DIR|FILE", conflicts_with = "resume")]
     init_from: Option<PathBuf>,
+    /// With --init-from and --pass-action, from a team trained without
+    /// `pass`: start `pass` as a copy of this action instead of `shoot`
+    /// (forward, turn_left, turn_right, shoot or stay). `turn_left` gives a
+    /// kicker that tries `pass` where it used to turn with the ball.
+    #[arg(long, value_name = "ACTION", requires_all = ["init_from", "pass_action"])]
+    pass_init: Option<naosoccer_proto::Action>,
     /// PPO: the critic reads the whole team's observations (MAPPO).
     #[arg(long)]
     central_critic: bool,
@@ -281,6 +287,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         );
     }
     cfg.init_from = a.init_from.clone();
+    cfg.init_pass_from = a.pass_init;
     if let Some(v) = a.obs_version {
         cfg.obs_version = v;
     }

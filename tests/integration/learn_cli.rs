@@ -266,10 +266,12 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
     ]
 }
 
-/// `train --pass-action --support-action --init-from`: a shipped team
-/// seeds a run with `pass` and `support`; the run records both and plays
-/// over the socket-free eval path; `--support-action` alone is refused, as
-/// is the support action without the team preset.
+/// `train --pass-action --support-action --init-from --pass-init
+/// turn_left`: a shipped team seeds a run with `pass` and `support`; the
+/// run records both and where `pass` started, and plays over the
+/// socket-free eval path; `--support-action` alone is refused, as is the
+/// support action without the team preset, and `--pass-init` without
+/// `--init-from`.
 #[cfg(feature = "train")]
 #[test]
 fn support_action_runs_start_from_a_shipped_team_and_play() {
@@ -286,6 +288,8 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         "--support-action",
         "--init-from",
         &shipped,
+        "--pass-init",
+        "turn_left",
         "--out",
         run_s,
     ]);
@@ -299,6 +303,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap();
     assert_eq!(config["ppo"]["decision"]["pass"], true);
     assert_eq!(config["ppo"]["decision"]["support"], true);
+    assert_eq!(config["init_pass_from"], "turn_left");
     let out = naosoccer(&[
         "eval",
         "--blue",
@@ -327,6 +332,18 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--pass-action"), "{err}");
+    let mut a = base.to_vec();
+    a.extend([
+        "--pass-action",
+        "--pass-init",
+        "turn_left",
+        "--out",
+        other_s,
+    ]);
+    let out = naosoccer(&a);
+    assert!(!out.status.success(), "--pass-init needs --init-from");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--init-from"), "{err}");
     let mut a = base.to_vec();
     a[4] = "cleanrl";
     a.extend(["--pass-action", "--support-action", "--out", other_s]);

@@ -99,9 +99,14 @@ pub struct TrainConfig {
     /// PPO team preset: the run starts from these weights (a finished run's
     /// `final.safetensors`, or a checkpoint) instead of fresh ones, with a
     /// fresh optimiser. An actor trained without `pass` gains it, its
-    /// logit starting as a copy of `shoot`'s.
+    /// logit starting as a copy of `shoot`'s (or `init_pass_from`'s).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub init_from: Option<std::path::PathBuf>,
+    /// With `init_from`: whose output row a gained `pass` row copies
+    /// (`shoot` when unset). `turn_left` starts a kicker that tries `pass`
+    /// where it used to turn with the ball (docs/LEARNING.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub init_pass_from: Option<naosoccer_proto::Action>,
 }
 
 impl TrainConfig {
@@ -125,6 +130,7 @@ impl TrainConfig {
             drill: None,
             pass_drills: None,
             init_from: None,
+            init_pass_from: None,
         }
     }
 }

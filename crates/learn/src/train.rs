@@ -286,6 +286,14 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             "--init-from starts PPO team-preset runs (--algo ppo --preset team) only".into(),
         ));
     }
+    if cfg.init_pass_from.is_some()
+        && (cfg.init_from.is_none() || !cfg.ppo.decision.is_some_and(|d| d.pass))
+    {
+        return Err(LearnError::Config(
+            "--pass-init names where a gained pass row starts: it needs --init-from and --pass-action"
+                .into(),
+        ));
+    }
     if cfg.ppo.decision.is_some() && cfg.obs_version < 2 {
         return Err(LearnError::Config(
             "the decision-level MDP needs observation layout v2 (busy flags, kick reach)".into(),
@@ -498,7 +506,8 @@ fn train_ppo_decisions(
     let (mut run, mut sched) = match &resume {
         None => {
             if let Some(from) = &cfg.init_from {
-                init_weights(&mut ppo, from)?;
+                let pass_from = cfg.init_pass_from.unwrap_or(naosoccer_proto::Action::Shoot);
+                init_weights(&mut ppo, from, pass_from)?;
             }
             let run = RunDir::create(out, cfg)?;
             let sched = start_schedule(cfg, out, &mut env, &ppo)?;
@@ -745,10 +754,15 @@ fn train_ppo_decisions(
 /// a run directory holding `final.safetensors`) into `ppo`'s networks. Every
 /// variable must be there with its shape, except that an actor with the
 /// `pass` action may start from one without it: its extra output row (the
-/// last layer's weights and bias) starts as a copy of `shoot`'s, so `pass`
-/// is at first as likely as `shoot` where both are possible.
-pub fn init_weights(ppo: &mut Ppo, path: &Path) -> Result<(), LearnError> {
-    use crate::ppo::{PASS, SHOOT};
+/// last layer's weights and bias) starts as a copy of `pass_from`'s (with
+/// `shoot`, `pass` is at first as likely as `shoot` where both are
+/// possible). `pass_from` must be one of the paper's five actions.
+pub fn init_weights(
+    ppo: &mut Ppo,
+    path: &Path,
+    pass_from: naosoccer_proto::Action,
+) -> Result<(), LearnError> {
+    use crate::ppo::PASS;
     use naosoccer_policy::SUPPORT;
     let file = if path.is_dir() {
         path.join("final.safetensors")
@@ -759,6 +773,13 @@ pub fn init_weights(ppo: &mut Ppo, path: &Path) -> Result<(), LearnError> {
         |reason: String| LearnError::Config(format!("--init-from {}: {reason}", file.display()));
     if !file.is_file() {
         return Err(bad("no such weights file".into()));
+    }
+    let pass_row = pass_from.index();
+    if pass_row >= PASS {
+        return Err(bad(format!(
+            "pass cannot start as a copy of {:?}: pick one of the five actions the source has",
+            pass_from.name()
+        )));
     }
     let named: std::collections::BTreeMap<String, tch::Tensor> =
         tch::Tensor::read_safetensors(&file)?.into_iter().collect();
@@ -771,7 +792,7 @@ pub fn init_weights(ppo: &mut Ppo, path: &Path) -> Result<(), LearnError> {
         let (want, got) = (var.size(), src.size());
         tch::no_grad(|| -> Result<(), LearnError> {
             // The actor's output layer may gain rows: `pass` (a copy of
-            // `shoot`) and `support` (a copy of `forward`, its bias lowered
+            // `pass_from`, by default `shoot`) and `support` (a copy of `forward`, its bias lowered
             // by SUPPORT_INIT_BIAS so that it starts rarer than `forward`).
             let widen = name.starts_with("actor.")
                 && !want.is_empty()
@@ -785,7 +806,7 @@ pub fn init_weights(ppo: &mut Ppo, path: &Path) -> Result<(), LearnError> {
                 var.narrow(0, 0, got[0]).copy_(src);
                 if got[0] == PASS as i64 {
                     var.narrow(0, PASS as i64, 1)
-                        .copy_(&src.narrow(0, SHOOT as i64, 1));
+                        .copy_(&src.narrow(0, pass_row as i64, 1));
                 }
                 if want[0] == SUPPORT as i64 + 1 {
                     let forward = src.narrow(0, naosoccer_policy::actions::FORWARD as i64, 1);

@@ -8,7 +8,7 @@ use naosoccer_client::PolicyKind;
 use naosoccer_learn::env::{EnvConfig, Opponent, VecEnv};
 use naosoccer_learn::train::{train, Algo, OpponentSpec, TrainConfig};
 use naosoccer_learn::{LearnedPolicy, OBS_DIM};
-use naosoccer_proto::Tick;
+use naosoccer_proto::{Action, Tick};
 use naosoccer_referee::MatchConfig;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -222,7 +222,7 @@ fn sampled_actions_do_not_depend_on_batching() {
     use naosoccer_client::Policy;
     use naosoccer_learn::policy::sample_uniform;
     use naosoccer_learn::ActMode;
-    use naosoccer_proto::{Action, Team};
+    use naosoccer_proto::Team;
     use naosoccer_referee::Match;
 
     let _torch = torch_lock();
@@ -492,7 +492,7 @@ fn team_policies_decide_alike_however_they_are_asked() {
     use naosoccer_client::Policy;
     use naosoccer_learn::ppo::{PpoConfig, SHOOT};
     use naosoccer_learn::ActMode;
-    use naosoccer_proto::{Action, Team};
+    use naosoccer_proto::Team;
     use naosoccer_referee::Match;
 
     let _torch = torch_lock();
@@ -806,7 +806,7 @@ fn epsilon_greedy_never_draws_a_masked_shoot() {
 /// (so the robots are spread over the pitch, lying, kicking, near and far
 /// from the ball), as each robot received them.
 fn recorded_observations(matches: u64) -> Vec<naosoccer_proto::Observation> {
-    use naosoccer_proto::{Action, RobotId, Team, ROBOTS};
+    use naosoccer_proto::{RobotId, Team, ROBOTS};
     use naosoccer_referee::Match;
     let cfg = MatchConfig {
         minutes: 0.5,
@@ -1117,8 +1117,8 @@ fn init_from_widens_the_actor_for_the_pass_action() {
         .collect();
     let logits = |p: &Ppo| actor_logits(p, &rows, n);
     let before = logits(&src);
-    let mut dst = Ppo::new(six, &scale, 4).unwrap();
-    init_weights(&mut dst, &dir).unwrap();
+    let mut dst = Ppo::new(six.clone(), &scale, 4).unwrap();
+    init_weights(&mut dst, &dir, Action::Shoot).unwrap();
     let after = logits(&dst);
     // (A 6-wide product may round differently from a 5-wide one.)
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-6;
@@ -1132,19 +1132,43 @@ fn init_from_widens_the_actor_for_the_pass_action() {
         assert!(close(after[i * 6 + PASS], before[i * 5 + SHOOT]), "row {i}");
         assert!(close(after[i * 6 + PASS], after[i * 6 + SHOOT]), "row {i}");
     }
+    // `--pass-init turn_left`: pass starts as turn_left, the rest as before;
+    // pass cannot start as itself.
+    let mut turn = Ppo::new(six.clone(), &scale, 4).unwrap();
+    init_weights(&mut turn, &dir, Action::TurnLeft).unwrap();
+    let turned = logits(&turn);
+    for i in 0..n {
+        for a in 0..5 {
+            assert!(close(turned[i * 6 + a], after[i * 6 + a]), "row {i}, {a}");
+        }
+        assert!(
+            close(
+                turned[i * 6 + PASS],
+                before[i * 5 + Action::TurnLeft.index()]
+            ),
+            "row {i}"
+        );
+    }
+    let mut itself = Ppo::new(six, &scale, 4).unwrap();
+    let err = init_weights(&mut itself, &dir, Action::Pass)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("cannot start as a copy of \"pass\""), "{err}");
     // Same shape: a plain copy. Another hidden width: refused.
     let mut same = Ppo::new(five.clone(), &scale, 4).unwrap();
-    init_weights(&mut same, &file).unwrap();
+    init_weights(&mut same, &file, Action::Shoot).unwrap();
     assert_eq!(logits(&same), before);
     let mut wide = five;
     wide.hidden = vec![32, 32];
     let mut other = Ppo::new(wide, &scale, 4).unwrap();
-    let err = init_weights(&mut other, &file).unwrap_err().to_string();
+    let err = init_weights(&mut other, &file, Action::Shoot)
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("actor.l0.bias") && err.contains("needs [32]"),
         "{err}"
     );
-    let err = init_weights(&mut same, &dir.join("missing.safetensors"))
+    let err = init_weights(&mut same, &dir.join("missing.safetensors"), Action::Shoot)
         .unwrap_err()
         .to_string();
     assert!(err.contains("no such weights file"), "{err}");
@@ -1182,7 +1206,7 @@ fn init_from_widens_the_actor_for_the_support_action() {
         naosoccer_learn::policy::save_stores(&[&src.net.vs], &file).unwrap();
         let before = logits(&src);
         let mut dst = Ppo::new(seven.clone(), &scale, 4).unwrap();
-        init_weights(&mut dst, &file).unwrap();
+        init_weights(&mut dst, &file, Action::Shoot).unwrap();
         let after = logits(&dst);
         for i in 0..n {
             for a in 0..k {
@@ -1206,7 +1230,9 @@ fn init_from_widens_the_actor_for_the_support_action() {
             let mut back = Ppo::new(PpoConfig::preset(Preset::Team), &scale, 4).unwrap();
             let wide = dir.join("from7.safetensors");
             naosoccer_learn::policy::save_stores(&[&dst.net.vs], &wide).unwrap();
-            let err = init_weights(&mut back, &wide).unwrap_err().to_string();
+            let err = init_weights(&mut back, &wide, Action::Shoot)
+                .unwrap_err()
+                .to_string();
             assert!(err.contains("needs [5"), "{err}");
         }
     }
