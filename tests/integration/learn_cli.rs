@@ -243,6 +243,12 @@ fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
     }
 }
 
+/// A shipped team's directory under assets/policies/.
+#[cfg(feature = "train")]
+fn shipped_policy(name: &str) -> String {
+    format!("{}/assets/policies/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
 /// A test-sized `train` on observation layout 3: 2,048 transitions, four
 /// six-second matches.
 #[cfg(feature = "train")]
@@ -277,10 +283,7 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
 fn support_action_runs_start_from_a_shipped_team_and_play() {
     let run = dir("cli_support_action");
     let run_s = run.to_str().unwrap();
-    let shipped = format!(
-        "{}/assets/policies/ppo-team-seed2",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let shipped = shipped_policy("ppo-team-seed2");
     let base = short_train("ppo", "team", "6");
     let mut a = base.to_vec();
     a.extend([
@@ -367,10 +370,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
 fn pass_action_runs_start_from_a_shipped_team_and_play() {
     let run = dir("cli_pass_action");
     let run_s = run.to_str().unwrap();
-    let shipped = format!(
-        "{}/assets/policies/ppo-team-seed1",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let shipped = shipped_policy("ppo-team-seed1");
     let args = |algo: &'static str, preset: &'static str| {
         let mut a = short_train(algo, preset, "5");
         a.push("--pass-action");
@@ -423,10 +423,7 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
     }
     // A network of another shape is named, not loaded.
     let mut a = args("ppo", "team");
-    let paper = format!(
-        "{}/assets/policies/ppo-paper-seed1",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let paper = shipped_policy("ppo-paper-seed1");
     a.extend(["--init-from", &paper, "--out", other_s]);
     let out = naosoccer(&a);
     assert!(!out.status.success());

@@ -792,8 +792,9 @@ pub fn init_weights(
         let (want, got) = (var.size(), src.size());
         tch::no_grad(|| -> Result<(), LearnError> {
             // The actor's output layer may gain rows: `pass` (a copy of
-            // `pass_from`, by default `shoot`) and `support` (a copy of `forward`, its bias lowered
-            // by SUPPORT_INIT_BIAS so that it starts rarer than `forward`).
+            // `pass_from`, by default `shoot`) and `support` (a copy of
+            // `forward`, its bias lowered by SUPPORT_INIT_BIAS so that it
+            // starts rarer than `forward`).
             let widen = name.starts_with("actor.")
                 && !want.is_empty()
                 && want[1..] == got[1..]
