@@ -98,6 +98,13 @@ pub struct TrainArgs {
     /// and `stay` each tick, so it needs nothing new on the wire.
     #[arg(long, requires = "pass_action")]
     support_action: bool,
+    /// With --support-action: one `support` decision holds up to this many
+    /// ticks (10 ticks = 1 s at the default 10 Hz; a robot walks 0.2 m/s),
+    /// until the robot reaches its spot or the ball comes within 0.6 m of
+    /// it, instead of --persist ticks like any movement. Recorded in the run's configuration, so the team plays
+    /// the same way in `match`, `eval` and over the socket. 0: off.
+    #[arg(long, value_name = "TICKS", requires = "support_action")]
+    support_hold: Option<u32>,
     /// PPO team preset: start from these weights (a run directory's
     /// final.safetensors, or a .safetensors checkpoint) with a fresh
     /// optimiser; the networks must have the run's shape, except that a
@@ -280,6 +287,9 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         d.mask_shoot &= !a.no_shoot_mask;
         d.pass = a.pass_action;
         d.support = a.support_action;
+        if let Some(k) = a.support_hold {
+            d.support_hold = k;
+        }
     } else {
         anyhow::ensure!(
             a.persist.is_none() && !a.no_shoot_mask && !a.pass_action && !a.support_action,

@@ -272,12 +272,12 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
     ]
 }
 
-/// `train --pass-action --support-action --init-from --pass-init
-/// turn_left`: a shipped team seeds a run with `pass` and `support`; the
-/// run records both and where `pass` started, and plays over the
-/// socket-free eval path; `--support-action` alone is refused, as is the
-/// support action without the team preset, and `--pass-init` without
-/// `--init-from`.
+/// `train --pass-action --support-action --support-hold 40 --init-from
+/// --pass-init turn_left`: a shipped team seeds a run with `pass` and a
+/// held `support`; the run records all three and where `pass` started, and
+/// plays over the socket-free eval path; `--support-action` alone is
+/// refused, as are `--support-hold` without it, the support action without
+/// the team preset, and `--pass-init` without `--init-from`.
 #[cfg(feature = "train")]
 #[test]
 fn support_action_runs_start_from_a_shipped_team_and_play() {
@@ -289,6 +289,8 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     a.extend([
         "--pass-action",
         "--support-action",
+        "--support-hold",
+        "40",
         "--init-from",
         &shipped,
         "--pass-init",
@@ -306,6 +308,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap();
     assert_eq!(config["ppo"]["decision"]["pass"], true);
     assert_eq!(config["ppo"]["decision"]["support"], true);
+    assert_eq!(config["ppo"]["decision"]["support_hold"], 40);
     assert_eq!(config["init_pass_from"], "turn_left");
     let out = naosoccer(&[
         "eval",
@@ -335,6 +338,15 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--pass-action"), "{err}");
+    let mut a = base.to_vec();
+    a.extend(["--pass-action", "--support-hold", "40", "--out", other_s]);
+    let out = naosoccer(&a);
+    assert!(
+        !out.status.success(),
+        "--support-hold needs --support-action"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--support-action"), "{err}");
     let mut a = base.to_vec();
     a.extend([
         "--pass-action",

@@ -168,6 +168,7 @@ impl DqnConfig {
                 mask_shoot: true,
                 pass: false,
                 support: false,
+                support_hold: 0,
             }),
         }
     }

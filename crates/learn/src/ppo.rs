@@ -183,6 +183,7 @@ impl PpoConfig {
                 mask_shoot: true,
                 pass: false,
                 support: false,
+                support_hold: 0,
             }),
         }
     }

@@ -281,6 +281,15 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             "the support action comes with the pass action (--pass-action --support-action)".into(),
         ));
     }
+    if decisions
+        .iter()
+        .flatten()
+        .any(|d| d.support_hold > 0 && !d.support)
+    {
+        return Err(LearnError::Config(
+            "--support-hold holds the support action: it needs --support-action".into(),
+        ));
+    }
     if cfg.init_from.is_some() && (cfg.algo != Algo::Ppo || cfg.ppo.decision.is_none()) {
         return Err(LearnError::Config(
             "--init-from starts PPO team-preset runs (--algo ppo --preset team) only".into(),
@@ -495,6 +504,7 @@ fn train_ppo_decisions(
         .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
     let mut env = make_env(cfg)?;
     let scale = run_scale(cfg);
+    let half = [scale.half_length, scale.half_width];
     let l = cfg.learners.len();
     let mut ppo = Ppo::new(cfg.ppo.clone(), &scale, l)?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
@@ -631,7 +641,7 @@ fn train_ppo_decisions(
                     .copy_from_slice(&dec_obs[j * OBS_DIM..(j + 1) * OBS_DIM]);
                 pend_cobs[r * cw..(r + 1) * cw].copy_from_slice(&dec_cobs[j * cw..(j + 1) * cw]);
                 let tick = env.learner_observation(r).tick;
-                holds[r].start(dec_act[j], tick, decision.persist);
+                holds[r].start(dec_act[j], tick, &decision, half);
                 actions[r] = dec_act[j];
             }
             let finished = env.step(&actions)?;
@@ -1113,6 +1123,7 @@ fn train_dqn_decisions(
     let mut env = make_env(cfg)?;
     let mut run = RunDir::create(out, cfg)?;
     let scale = run_scale(cfg);
+    let half = [scale.half_length, scale.half_width];
     let robots = cfg.learners.len();
     let mut dqn = Dqn::new(cfg.dqn.clone(), robots, run_scale(cfg).dim())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
@@ -1174,7 +1185,7 @@ fn train_dqn_decisions(
                     discount: 1.0,
                 };
                 open_obs[r * OBS_DIM..(r + 1) * OBS_DIM].copy_from_slice(row);
-                holds[r].start(a, env.learner_observation(r).tick, decision.persist);
+                holds[r].start(a, env.learner_observation(r).tick, &decision, half);
                 actions[r] = a;
             }
         }

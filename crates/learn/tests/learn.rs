@@ -8,6 +8,7 @@ use naosoccer_client::PolicyKind;
 use naosoccer_learn::env::{EnvConfig, Opponent, VecEnv};
 use naosoccer_learn::train::{train, Algo, OpponentSpec, TrainConfig};
 use naosoccer_learn::{LearnedPolicy, OBS_DIM};
+use naosoccer_policy::actions::DecisionConfig;
 use naosoccer_proto::{Action, Tick};
 use naosoccer_referee::MatchConfig;
 use rand::{Rng, SeedableRng};
@@ -458,9 +459,17 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
         o.own[1].fallen = fallen;
         o
     };
+    let d = DecisionConfig {
+        persist: 3,
+        mask_shoot: true,
+        pass: false,
+        support: false,
+        support_hold: 0,
+    };
+    let half = [4.5, 3.0];
     let mut h = Hold::default();
     assert!(h.must_decide(&at(0, false, false)));
-    h.start(0, Tick::ZERO, 3);
+    h.start(0, Tick::ZERO, &d, half);
     for t in 1..3 {
         assert!(!h.must_decide(&at(t, false, false)), "tick {t} holds");
         assert_eq!(h.held(&at(t, false, false)), 0);
@@ -472,13 +481,85 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
         h.must_decide(&at(5, false, false)),
         "free again, persistence over"
     );
-    h.start(SHOOT, Tick::new(5), 3);
+    h.start(SHOOT, Tick::new(5), &d, half);
     assert!(
         h.must_decide(&at(6, false, false)),
         "a shoot holds one tick"
     );
-    h.start(0, Tick::new(6), 3);
+    h.start(0, Tick::new(6), &d, half);
     assert!(h.must_decide(&at(0, false, false)), "a new match");
+}
+
+/// With `support_hold`, one `support` decision holds until its robot
+/// reaches the support spot, the ball comes near or the cap runs out, and
+/// at least `persist` ticks; without it, `support` holds `persist` ticks.
+#[test]
+fn a_support_hold_lasts_until_the_robot_arrives() {
+    use naosoccer_learn::policy::Hold;
+    use naosoccer_policy::actions::{support_spot, SUPPORT};
+    use naosoccer_proto::Team;
+    use naosoccer_referee::Match;
+
+    let m = Match::new(&MatchConfig::default(), 1).unwrap();
+    let field = naosoccer_referee::Field::from_sim(&MatchConfig::default().sim);
+    let half = [field.half_length, field.half_width];
+    // Robot 1 at (x, 1.0), the ball at (0, 0): its spot is (1.5, 1.0).
+    let at = |tick: u64, x: f32, ball: (f32, f32)| {
+        let mut o = m.observe(Team::Blue, 1);
+        o.tick = Tick::new(tick);
+        o.own[1].x = x;
+        o.own[1].y = 1.0;
+        o.own[1].fallen = false;
+        o.own[1].busy = false;
+        o.ball.x = ball.0;
+        o.ball.y = ball.1;
+        o
+    };
+    let spot = support_spot(&at(0, -2.0, (0.0, 0.0)), half);
+    assert_eq!(spot, [1.5, 1.0]);
+    let mut d = DecisionConfig {
+        persist: 3,
+        mask_shoot: true,
+        pass: true,
+        support: true,
+        support_hold: 30,
+    };
+    let mut h = Hold::default();
+    assert!(h.must_decide(&at(0, -2.0, (0.0, 0.0))));
+    h.start(SUPPORT, Tick::ZERO, &d, half);
+    for t in 1..30 {
+        assert!(
+            !h.must_decide(&at(t, -2.0, (0.0, 0.0))),
+            "tick {t}: still walking"
+        );
+        assert_eq!(h.held(&at(t, -2.0, (0.0, 0.0))), SUPPORT);
+    }
+    assert!(h.must_decide(&at(30, -2.0, (0.0, 0.0))), "the cap ran out");
+    // Arrived: it decides again, but not before `persist` ticks.
+    h.start(SUPPORT, Tick::new(30), &d, half);
+    assert!(!h.must_decide(&at(31, 1.4, (0.0, 0.0))), "persist first");
+    assert!(
+        h.must_decide(&at(33, 1.4, (0.0, 0.0))),
+        "arrived at its spot"
+    );
+    // The ball comes near (a pass reaches it): it decides.
+    h.start(SUPPORT, Tick::new(40), &d, half);
+    assert!(
+        !h.must_decide(&at(43, -2.0, (-1.0, 0.5))),
+        "ball 1.1 m away"
+    );
+    assert!(
+        h.must_decide(&at(44, -2.0, (-1.7, 0.7))),
+        "ball 0.42 m away"
+    );
+    // Other actions keep holding `persist` ticks.
+    h.start(0, Tick::new(50), &d, half);
+    assert!(!h.must_decide(&at(51, 1.4, (0.0, 0.0))));
+    assert!(h.must_decide(&at(53, -2.0, (0.0, 0.0))));
+    // Without the hold, `support` is a movement like any other.
+    d.support_hold = 0;
+    h.start(SUPPORT, Tick::new(60), &d, half);
+    assert!(h.must_decide(&at(63, -2.0, (0.0, 0.0))));
 }
 
 /// A `team`-preset policy plays the same whether each robot has its own

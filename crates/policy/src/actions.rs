@@ -44,6 +44,10 @@ pub const SUPPORT_ARRIVE: f32 = 0.3;
 pub const SUPPORT_WALK_CONE: f32 = 0.35;
 /// Arrived, it turns until the ball is within this angle of its heading (rad).
 pub const SUPPORT_FACE_CONE: f32 = 0.5;
+/// With [`DecisionConfig::support_hold`], a held `support` also ends once
+/// the ball is this close to the robot (m), so a robot that a pass reaches
+/// decides at once.
+pub const SUPPORT_RELEASE_BALL: f32 = 0.6;
 
 /// Index of `shoot` among the actions.
 pub const SHOOT: usize = 3;
@@ -72,6 +76,20 @@ pub struct DecisionConfig {
     /// from older runs' configurations: `false`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub support: bool,
+    /// With `support`: the most ticks one `support` decision holds. The
+    /// robot then walks on to its spot without deciding again until it
+    /// arrives (within [`SUPPORT_ARRIVE`]), the ball comes within
+    /// [`SUPPORT_RELEASE_BALL`] of it, or this many ticks pass, and holds
+    /// at least `persist` ticks as any movement does. One choice of
+    /// `support` then puts a robot ahead of the ball, where a one-tick
+    /// choice moved it a few centimetres. 0 (and absent from older runs'
+    /// configurations): `support` holds `persist` ticks like any movement.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub support_hold: u32,
+}
+
+fn is_zero(v: &u32) -> bool {
+    *v == 0
 }
 
 impl DecisionConfig {
@@ -113,12 +131,7 @@ pub fn support_action(obs: &Observation, half: [f32; 2]) -> Action {
         return Action::Stay;
     }
     let (bx, by) = (obs.ball.x, obs.ball.y);
-    let side = if me.y >= by { 1.0 } else { -1.0 };
-    let (lx, ly) = ((half[0] - 0.3).max(0.0), (half[1] - 0.3).max(0.0));
-    let spot = [
-        (bx + SUPPORT_AHEAD).clamp(-lx, lx),
-        (by + side * SUPPORT_SIDE).clamp(-ly, ly),
-    ];
+    let spot = support_spot(obs, half);
     let (dx, dy) = (spot[0] - me.x, spot[1] - me.y);
     let (target, cone, arrived) = if dx.hypot(dy) > SUPPORT_ARRIVE {
         ([dx, dy], SUPPORT_WALK_CONE, false)
@@ -137,6 +150,21 @@ pub fn support_action(obs: &Observation, half: [f32; 2]) -> Action {
     } else {
         Action::Forward
     }
+}
+
+/// The support spot of the robot that received `obs` (observation frame,
+/// m): [`SUPPORT_AHEAD`] ahead of the ball and [`SUPPORT_SIDE`] to the side
+/// of it the robot stands on, kept 0.3 m inside the lines of a pitch of
+/// half length and half width `half`.
+pub fn support_spot(obs: &Observation, half: [f32; 2]) -> [f32; 2] {
+    let me = obs.me();
+    let (bx, by) = (obs.ball.x, obs.ball.y);
+    let side = if me.y >= by { 1.0 } else { -1.0 };
+    let (lx, ly) = ((half[0] - 0.3).max(0.0), (half[1] - 0.3).max(0.0));
+    [
+        (bx + SUPPORT_AHEAD).clamp(-lx, lx),
+        (by + side * SUPPORT_SIDE).clamp(-ly, ly),
+    ]
 }
 
 /// The number of actions of a team in `decision` (`None`: the paper's five).
@@ -214,23 +242,46 @@ pub fn action_mask(shoot_ok: &[bool], pass_ok: &[bool], actions: usize) -> Vec<f
 /// the action it holds and until which tick. The trainer and
 /// [`crate::LearnedPolicy`] both use it, so a team decides in play exactly
 /// when it decided in training, in process or over the socket.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Hold {
     action: usize,
     until: Tick,
     last_tick: Option<Tick>,
+    /// A `support` held to its spot ([`DecisionConfig::support_hold`]):
+    /// from this tick on it also ends on arrival or with the ball near.
+    release_from: Option<Tick>,
+    /// The pitch's half length and half width (m), for the support spot.
+    half: [f32; 2],
 }
 
 impl Hold {
     /// Whether the robot that received `obs` decides now: it is free to act
     /// (not lying, not busy in a kick) and its last decision's persistence
-    /// has run out. A tick earlier than the last one seen is a new match.
+    /// has run out (for a `support` held to its spot: also once it arrived
+    /// or the ball came near). A tick earlier than the last one seen is a
+    /// new match.
     pub fn must_decide(&mut self, obs: &Observation) -> bool {
         if self.last_tick.is_some_and(|t| obs.tick < t) {
             *self = Hold::default();
         }
         self.last_tick = Some(obs.tick);
-        is_free(obs) && obs.tick >= self.until
+        if !is_free(obs) {
+            return false;
+        }
+        if obs.tick >= self.until {
+            return true;
+        }
+        match self.release_from {
+            Some(from) if obs.tick >= from => {
+                let me = obs.me();
+                let spot = support_spot(obs, self.half);
+                let arrived = (spot[0] - me.x).hypot(spot[1] - me.y) <= SUPPORT_ARRIVE;
+                let ball_near =
+                    (obs.ball.x - me.x).hypot(obs.ball.y - me.y) <= SUPPORT_RELEASE_BALL;
+                arrived || ball_near
+            }
+            _ => false,
+        }
     }
 
     /// The action of a robot that does not decide now: what it holds while
@@ -243,14 +294,23 @@ impl Hold {
         }
     }
 
-    /// Records a decision at `tick`: a movement lasts `persist` ticks, a
-    /// `shoot` or `pass` one (the kick then keeps the robot busy).
-    pub fn start(&mut self, action: usize, tick: Tick, persist: u32) {
+    /// Records a decision at `tick` under `decision`, on a pitch of half
+    /// length and half width `half` (m): a movement lasts `persist` ticks, a
+    /// `shoot` or `pass` one (the kick then keeps the robot busy), a
+    /// `support` with `support_hold` until its robot arrives, the ball
+    /// comes near or `support_hold` ticks pass.
+    pub fn start(&mut self, action: usize, tick: Tick, decision: &DecisionConfig, half: [f32; 2]) {
         self.action = action;
+        let persist = u64::from(decision.persist.max(1));
+        self.release_from = None;
         let ticks = if action == SHOOT || action == PASS {
             1
+        } else if action == SUPPORT && u64::from(decision.support_hold) > persist {
+            self.release_from = Some(tick + persist);
+            self.half = half;
+            u64::from(decision.support_hold)
         } else {
-            u64::from(persist.max(1))
+            persist
         };
         self.until = tick + ticks;
     }

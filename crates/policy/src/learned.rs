@@ -473,12 +473,13 @@ impl LearnedPolicy {
         }
         self.pass_ok = pass_ok;
         if !deciding.is_empty() {
+            let half = [self.scale.half_length, self.scale.half_width];
             let mut acts = vec![0usize; deciding.len()];
             self.act_rows_keyed(&feats, &players, &keys, &mut acts);
             for (&(at, key, tick), &a) in deciding.iter().zip(&acts) {
                 out[at] = a;
                 if let Some(d) = self.decision {
-                    self.holds.entry(key).or_default().start(a, tick, d.persist);
+                    self.holds.entry(key).or_default().start(a, tick, &d, half);
                 }
             }
         }
