@@ -101,10 +101,19 @@ pub struct TrainArgs {
     /// With --support-action: one `support` decision holds up to this many
     /// ticks (10 ticks = 1 s at the default 10 Hz; a robot walks 0.2 m/s),
     /// until the robot reaches its spot or the ball comes within 0.6 m of
-    /// it, instead of --persist ticks like any movement. Recorded in the run's configuration, so the team plays
-    /// the same way in `match`, `eval` and over the socket. 0: off.
+    /// it, instead of --persist ticks like any movement. Recorded in the
+    /// run's configuration, so the team plays the same way in `match`,
+    /// `eval` and over the socket. 0: off.
     #[arg(long, value_name = "TICKS", requires = "support_action")]
     support_hold: Option<u32>,
+    /// With --support-action: roles. Only the team's chaser (the standing
+    /// robot nearest the ball; on a tie the lower player number) may walk
+    /// `forward` or turn; the others choose among `support`, `stay` and,
+    /// with the ball in reach, `shoot` and `pass`. Read from each robot's
+    /// own observation and recorded in the run's configuration, so the team
+    /// plays the same way in `match`, `eval` and over the socket.
+    #[arg(long, requires = "support_action")]
+    support_roles: bool,
     /// PPO team preset: start from these weights (a run directory's
     /// final.safetensors, or a .safetensors checkpoint) with a fresh
     /// optimiser; the networks must have the run's shape, except that a
@@ -290,6 +299,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         if let Some(k) = a.support_hold {
             d.support_hold = k;
         }
+        d.roles = a.support_roles;
     } else {
         anyhow::ensure!(
             a.persist.is_none() && !a.no_shoot_mask && !a.pass_action && !a.support_action,

@@ -272,12 +272,13 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
     ]
 }
 
-/// `train --pass-action --support-action --support-hold 40 --init-from
-/// --pass-init turn_left`: a shipped team seeds a run with `pass` and a
-/// held `support`; the run records all three and where `pass` started, and
-/// plays over the socket-free eval path; `--support-action` alone is
-/// refused, as are `--support-hold` without it, the support action without
-/// the team preset, and `--pass-init` without `--init-from`.
+/// `train --pass-action --support-action --support-hold 40 --support-roles
+/// --init-from --pass-init turn_left`: a shipped team seeds a run with
+/// `pass`, a held `support` and roles; the run records all four and where
+/// `pass` started, and plays over the socket-free eval path;
+/// `--support-action` alone is refused, as are `--support-hold` and
+/// `--support-roles` without it, the support action without the team
+/// preset, and `--pass-init` without `--init-from`.
 #[cfg(feature = "train")]
 #[test]
 fn support_action_runs_start_from_a_shipped_team_and_play() {
@@ -291,6 +292,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         "--support-action",
         "--support-hold",
         "40",
+        "--support-roles",
         "--init-from",
         &shipped,
         "--pass-init",
@@ -309,6 +311,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     assert_eq!(config["ppo"]["decision"]["pass"], true);
     assert_eq!(config["ppo"]["decision"]["support"], true);
     assert_eq!(config["ppo"]["decision"]["support_hold"], 40);
+    assert_eq!(config["ppo"]["decision"]["roles"], true);
     assert_eq!(config["init_pass_from"], "turn_left");
     let out = naosoccer(&[
         "eval",
@@ -344,6 +347,15 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     assert!(
         !out.status.success(),
         "--support-hold needs --support-action"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--support-action"), "{err}");
+    let mut a = base.to_vec();
+    a.extend(["--pass-action", "--support-roles", "--out", other_s]);
+    let out = naosoccer(&a);
+    assert!(
+        !out.status.success(),
+        "--support-roles needs --support-action"
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--support-action"), "{err}");

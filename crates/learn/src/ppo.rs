@@ -184,6 +184,7 @@ impl PpoConfig {
                 pass: false,
                 support: false,
                 support_hold: 0,
+                roles: false,
             }),
         }
     }
@@ -436,14 +437,14 @@ impl Ppo {
     }
 
     /// Samples one action per row (`n` rows of `OBS_DIM`), `shoot` masked
-    /// where `shoot_ok` is false and `pass` (with six actions) where
-    /// `pass_ok` is; writes the actions and their log-probabilities under
-    /// the masked policy.
+    /// where `shoot_ok` is false and what `banned` bans
+    /// ([`naosoccer_policy::actions::banned_actions`]); writes the actions
+    /// and their log-probabilities under the masked policy.
     pub fn act_masked(
         &mut self,
         obs: &[f32],
         shoot_ok: &[bool],
-        pass_ok: &[bool],
+        banned: &[u8],
         rng: &mut ChaCha8Rng,
         actions: &mut [usize],
         logp: &mut [f32],
@@ -454,7 +455,7 @@ impl Ppo {
         }
         let k = self.cfg.actions();
         let x = self.net.actor_input(obs, n);
-        let m = action_mask(&shoot_ok[..n], pass_ok, k);
+        let m = action_mask(&shoot_ok[..n], banned, k);
         let mask = Tensor::from_slice(&m).view([n as i64, k as i64]);
         let p = tch::no_grad(|| (self.net.logits(&x) + mask).softmax(-1, Kind::Float));
         self.probs.resize(n * k, 0.0);
@@ -524,7 +525,7 @@ impl Ppo {
         let actions = Tensor::from_slice(&tr.actions);
         let logp_old = Tensor::from_slice(&tr.logp);
         let k = cfg.actions();
-        let mask = Tensor::from_slice(&action_mask(&tr.shoot_ok, &tr.pass_ok, k))
+        let mask = Tensor::from_slice(&action_mask(&tr.shoot_ok, &tr.banned, k))
             .view([n as i64, k as i64]);
         let adv = Tensor::from_slice(&adv);
         let targets = Tensor::from_slice(&targets);
@@ -809,8 +810,10 @@ pub struct Transitions {
     pub actions: Vec<i64>,
     pub logp: Vec<f32>,
     pub shoot_ok: Vec<bool>,
-    /// Whether `pass` was possible (empty without the `pass` action).
-    pub pass_ok: Vec<bool>,
+    /// The actions banned beyond a `shoot` out of reach
+    /// ([`naosoccer_policy::actions::banned_actions`]; empty without the
+    /// `pass` action).
+    pub banned: Vec<u8>,
     /// V(s) at the decision, in return units.
     pub values: Vec<f32>,
     /// `sum_{i < dt} gamma^i r_i`: the rewards until the next decision.
@@ -841,7 +844,7 @@ impl Transitions {
         self.actions.clear();
         self.logp.clear();
         self.shoot_ok.clear();
-        self.pass_ok.clear();
+        self.banned.clear();
         self.values.clear();
         self.rewards.clear();
         self.dt.clear();
@@ -969,7 +972,7 @@ mod tests {
             actions: vec![0, 0, 1],
             logp: vec![0.0; 3],
             shoot_ok: vec![true; 3],
-            pass_ok: vec![],
+            banned: vec![],
             // Closing order: A's first (index 0), A's second (1, at the
             // edge), B's (2, at the end).
             values: vec![1.0, 2.0, 0.5],

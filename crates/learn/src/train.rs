@@ -26,7 +26,7 @@ use crate::policy::{save_stores, Hold, LearnedPolicy};
 use crate::ppo::{Ppo, Rollout, Transitions, ACTIONS};
 use crate::schedule_runner::ScheduleRunner;
 use crate::LearnError;
-use naosoccer_policy::actions::pass_possible;
+use naosoccer_policy::actions::banned_actions;
 
 // The configuration and the self-play snapshot live where the modules that
 // read them can reach them without importing the training loops; these are
@@ -290,6 +290,13 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             "--support-hold holds the support action: it needs --support-action".into(),
         ));
     }
+    if decisions.iter().flatten().any(|d| d.roles && !d.support) {
+        return Err(LearnError::Config(
+            "--support-roles sends the robots away from the ball to support: it needs \
+             --support-action"
+                .into(),
+        ));
+    }
     if cfg.init_from.is_some() && (cfg.algo != Algo::Ppo || cfg.ppo.decision.is_none()) {
         return Err(LearnError::Config(
             "--init-from starts PPO team-preset runs (--algo ppo --preset team) only".into(),
@@ -476,7 +483,8 @@ struct Pending {
     logp: f32,
     value: f32,
     shoot_ok: bool,
-    pass_ok: bool,
+    /// [`banned_actions`] at the decision.
+    banned: u8,
     /// `sum gamma^i r_i` so far, and `gamma^elapsed`.
     reward: f32,
     discount: f32,
@@ -571,9 +579,9 @@ fn train_ppo_decisions(
     let (mut dec_rows, mut dec_obs, mut dec_cobs, mut dec_ok) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
-    // With the `pass` action: whether each deciding robot may pass.
+    // With the `pass` action: what each deciding robot may not choose.
     let passes = decision.pass;
-    let mut dec_pass = Vec::new();
+    let mut dec_banned = Vec::new();
     let (mut cut_rows, mut cut_cobs, mut cut_val) = (Vec::new(), Vec::new(), Vec::new());
     let mut out_rows = Vec::new();
     let mut last_checkpoint = transitions;
@@ -590,7 +598,7 @@ fn train_ppo_decisions(
             dec_obs.clear();
             dec_cobs.clear();
             dec_ok.clear();
-            dec_pass.clear();
+            dec_banned.clear();
             for (r, hold) in holds.iter_mut().enumerate() {
                 let o = env.learner_observation(r);
                 if hold.must_decide(o) {
@@ -598,7 +606,9 @@ fn train_ppo_decisions(
                     dec_obs.extend_from_slice(&env.observations()[r * OBS_DIM..(r + 1) * OBS_DIM]);
                     push_critic_row(env.observations(), l, r, scale.dim(), cw, &mut dec_cobs);
                     dec_ok.push(!cfg.ppo.masks_shoot() || scale.kick.in_reach(o));
-                    dec_pass.push(passes && pass_possible(o, scale.kick.in_reach(o)));
+                    if passes {
+                        dec_banned.push(banned_actions(o, scale.kick.in_reach(o), &decision));
+                    }
                 } else {
                     actions[r] = hold.held(o);
                 }
@@ -610,7 +620,7 @@ fn train_ppo_decisions(
             ppo.act_masked(
                 &dec_obs,
                 &dec_ok,
-                &dec_pass,
+                &dec_banned,
                 &mut rng,
                 &mut dec_act,
                 &mut dec_logp,
@@ -631,7 +641,7 @@ fn train_ppo_decisions(
                     logp: dec_logp[j],
                     value: dec_val[j],
                     shoot_ok: dec_ok[j],
-                    pass_ok: dec_pass[j],
+                    banned: dec_banned.get(j).copied().unwrap_or(0),
                     reward: 0.0,
                     discount: 1.0,
                     elapsed: 0,
@@ -980,7 +990,7 @@ fn close_pending(
     tr.actions.push(p.action as i64);
     tr.logp.push(p.logp);
     tr.shoot_ok.push(p.shoot_ok);
-    tr.pass_ok.push(p.pass_ok);
+    tr.banned.push(p.banned);
     tr.values.push(p.value);
     tr.rewards.push(p.reward);
     tr.dt.push(p.elapsed.max(1));

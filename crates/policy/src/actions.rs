@@ -49,6 +49,10 @@ pub const SUPPORT_FACE_CONE: f32 = 0.5;
 /// decides at once.
 pub const SUPPORT_RELEASE_BALL: f32 = 0.6;
 
+/// Index of `turn_left`.
+pub const TURN_LEFT: usize = 1;
+/// Index of `turn_right`.
+pub const TURN_RIGHT: usize = 2;
 /// Index of `shoot` among the actions.
 pub const SHOOT: usize = 3;
 /// Index of `stay`.
@@ -86,6 +90,14 @@ pub struct DecisionConfig {
     /// configurations): `support` holds `persist` ticks like any movement.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub support_hold: u32,
+    /// With `support`: roles. Only the team's chaser ([`is_chaser`]: the
+    /// standing robot nearest the ball) may `forward` or turn; the others
+    /// choose among `support`, `stay` and, with the ball in reach, `shoot`
+    /// and `pass`, so that the robots away from the ball stand where a pass
+    /// can reach them instead of crowding it. Absent from older runs'
+    /// configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub roles: bool,
 }
 
 fn is_zero(v: &u32) -> bool {
@@ -178,6 +190,43 @@ pub fn pass_possible(obs: &Observation, in_reach: bool) -> bool {
     in_reach && naosoccer_proto::pass_receiver(obs).is_some()
 }
 
+/// Whether the robot that received `obs` is its team's chaser under
+/// [`DecisionConfig::roles`]: it stands, and no standing teammate is nearer
+/// the ball (on a tie, the lower player number chases). Read from the
+/// observation alone, so in-process and socket play agree.
+pub fn is_chaser(obs: &Observation) -> bool {
+    let me = obs.player.index();
+    if obs.own[me].fallen {
+        return false;
+    }
+    let d = |r: &naosoccer_proto::RobotObs| (r.x - obs.ball.x).hypot(r.y - obs.ball.y);
+    let mine = d(&obs.own[me]);
+    !obs.own
+        .iter()
+        .enumerate()
+        .any(|(j, r)| j != me && !r.fallen && (d(r) < mine || (d(r) == mine && j < me)))
+}
+
+/// The actions a robot that is not its team's chaser may not choose under
+/// [`DecisionConfig::roles`], as bits (`1 << index`): `forward` and the turns.
+pub const ROLE_BANNED: u8 = 1 << FORWARD | 1 << TURN_LEFT | 1 << TURN_RIGHT;
+
+/// The actions, beyond a `shoot` out of reach, that the robot that received
+/// `obs` may not choose now under `decision`, as bits (`1 << index`):
+/// `pass` without a receiver or out of reach (`in_reach`, from the
+/// encoder), and [`ROLE_BANNED`] for a robot that is not the chaser under
+/// [`DecisionConfig::roles`].
+pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> u8 {
+    let mut banned = 0;
+    if decision.pass && !pass_possible(obs, in_reach) {
+        banned |= 1 << PASS;
+    }
+    if decision.roles && !is_chaser(obs) {
+        banned |= ROLE_BANNED;
+    }
+    banned
+}
+
 /// The uniform number in [0, 1) a sampling robot uses at `tick`: a hash of
 /// the match seed, the robot's team and player and the tick, so it does not
 /// depend on how robots are batched or in which order they are asked.
@@ -222,18 +271,33 @@ pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
     action_mask(shoot_ok, &[], ACTIONS)
 }
 
+/// The bans of row `i` of `banned` ([`banned_actions`]) for rows of
+/// `actions` actions: a row beyond `banned` may not `pass`.
+pub fn row_bans(banned: &[u8], i: usize, actions: usize) -> u8 {
+    let missing = if actions > PASS { 1 << PASS } else { 0 };
+    banned.get(i).copied().unwrap_or(missing)
+}
+
+/// Adds [`MASKED_LOGIT`] to the entries of `row` (one row of logits) that
+/// `bans` ([`banned_actions`]) bans.
+pub fn mask_row(row: &mut [f32], bans: u8) {
+    for (a, x) in row.iter_mut().enumerate().take(8) {
+        if bans & (1 << a) != 0 {
+            *x += MASKED_LOGIT;
+        }
+    }
+}
+
 /// Additive logit masks for rows of `actions` logits: [`MASKED_LOGIT`] on
-/// `shoot` where `shoot_ok` is false and, with six actions, on `pass` where
-/// `pass_ok` is false (or missing).
-pub fn action_mask(shoot_ok: &[bool], pass_ok: &[bool], actions: usize) -> Vec<f32> {
+/// `shoot` where `shoot_ok` is false and on what `banned` bans
+/// ([`banned_actions`]; a row beyond it may not `pass`).
+pub fn action_mask(shoot_ok: &[bool], banned: &[u8], actions: usize) -> Vec<f32> {
     let mut m = vec![0.0; shoot_ok.len() * actions];
-    for (i, &ok) in shoot_ok.iter().enumerate() {
+    for (i, (&ok, row)) in shoot_ok.iter().zip(m.chunks_exact_mut(actions)).enumerate() {
         if !ok {
-            m[i * actions + SHOOT] = MASKED_LOGIT;
+            row[SHOOT] = MASKED_LOGIT;
         }
-        if actions > PASS && !pass_ok.get(i).copied().unwrap_or(false) {
-            m[i * actions + PASS] = MASKED_LOGIT;
-        }
+        mask_row(row, row_bans(banned, i, actions));
     }
     m
 }

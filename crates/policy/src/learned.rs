@@ -26,8 +26,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::actions::MASKED_LOGIT;
 use crate::actions::{
-    action_count, argmax, pass_possible, sample, sample_uniform, to_action, DecisionConfig, Hold,
-    ACTIONS, PASS, SHOOT,
+    action_count, argmax, banned_actions, mask_row, row_bans, sample, sample_uniform, to_action,
+    DecisionConfig, Hold, ACTIONS, SHOOT,
 };
 use crate::mlp::{Activation, Mlp, Weights};
 use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION_LATEST};
@@ -189,10 +189,10 @@ pub struct LearnedPolicy {
     holds: BTreeMap<(u64, usize, usize), Hold>,
     /// Outputs per row: 5, or 6 for a team trained with `pass`.
     actions: usize,
-    /// Per row of the decision in progress: whether `pass` is possible
-    /// (filled from the observations by `act_matches`; a row beyond it
-    /// cannot pass).
-    pass_ok: Vec<bool>,
+    /// Per row of the decision in progress: the actions it may not choose
+    /// beyond a `shoot` out of reach ([`banned_actions`], filled from the
+    /// observations by `act_matches`; a row beyond it cannot pass).
+    banned: Vec<u8>,
 }
 
 impl std::fmt::Debug for LearnedPolicy {
@@ -382,7 +382,7 @@ impl LearnedPolicy {
             decision: cfg.decision(),
             holds: BTreeMap::new(),
             actions,
-            pass_ok: Vec::new(),
+            banned: Vec::new(),
         })
     }
 
@@ -435,11 +435,11 @@ impl LearnedPolicy {
         let mut feats = std::mem::take(&mut self.feats);
         let mut players = std::mem::take(&mut self.players);
         let mut keys = std::mem::take(&mut self.keys);
-        let mut pass_ok = std::mem::take(&mut self.pass_ok);
+        let mut banned = std::mem::take(&mut self.banned);
         feats.clear();
         players.clear();
         keys.clear();
-        pass_ok.clear();
+        banned.clear();
         // Rows that decide now: (index into out, hold key, tick).
         let mut deciding: Vec<(usize, (u64, usize, usize), Tick)> = Vec::with_capacity(n);
         let mut i = 0;
@@ -461,8 +461,8 @@ impl LearnedPolicy {
                     let row = feats.len();
                     feats.resize(row + OBS_DIM, 0.0);
                     self.scale.encode(o, &mut feats[row..row + OBS_DIM]);
-                    if self.actions > PASS {
-                        pass_ok.push(pass_possible(o, self.scale.kick.in_reach(o)));
+                    if let Some(d) = &self.decision {
+                        banned.push(banned_actions(o, self.scale.kick.in_reach(o), d));
                     }
                     players.push(key.2);
                     keys.push(sample_uniform(seed, key.1, key.2, o.tick));
@@ -471,7 +471,7 @@ impl LearnedPolicy {
                 i += 1;
             }
         }
-        self.pass_ok = pass_ok;
+        self.banned = banned;
         if !deciding.is_empty() {
             let half = [self.scale.half_length, self.scale.half_width];
             let mut acts = vec![0usize; deciding.len()];
@@ -521,7 +521,7 @@ impl LearnedPolicy {
             );
         }
         self.calls += 1;
-        self.pass_ok.clear();
+        self.banned.clear();
         self.act_rows_keyed(obs, players, &keys, out);
         self.keys = keys;
     }
@@ -570,9 +570,7 @@ impl LearnedPolicy {
                     if !shoot_ok(i) {
                         row[SHOOT] += MASKED_LOGIT;
                     }
-                    if na > PASS && !self.pass_ok.get(i).copied().unwrap_or(false) {
-                        row[PASS] += MASKED_LOGIT;
-                    }
+                    mask_row(row, row_bans(&self.banned, i, na));
                     *o = if sample_it {
                         softmax(row);
                         sample(row, uniforms[i])
@@ -634,23 +632,24 @@ impl LearnedPolicy {
     /// applied as in play (`pass` too).
     pub fn probabilities_for(&self, obs: &[Observation]) -> Vec<f32> {
         let mut feats = vec![0.0; obs.len() * OBS_DIM];
-        let mut pass_ok = Vec::with_capacity(obs.len());
+        let mut banned = Vec::with_capacity(obs.len());
         for (o, row) in obs.iter().zip(feats.chunks_exact_mut(OBS_DIM)) {
             self.scale.encode(o, row);
-            pass_ok.push(pass_possible(o, self.scale.kick.in_reach(o)));
+            let in_reach = self.scale.kick.in_reach(o);
+            banned.push(self.decision.map_or(0, |d| banned_actions(o, in_reach, &d)));
         }
-        self.probabilities_masked(&feats, &pass_ok)
+        self.probabilities_masked(&feats, &banned)
     }
 
-    fn probabilities_masked(&self, obs: &[f32], pass_ok: &[bool]) -> Vec<f32> {
+    fn probabilities_masked(&self, obs: &[f32], banned: &[u8]) -> Vec<f32> {
         let mut p = self.outputs(obs, 0);
         let masks = self.masks_shoot();
         for (i, row) in p.chunks_exact_mut(self.actions).enumerate() {
             if masks && obs[i * OBS_DIM + IN_REACH_FEATURE] <= 0.5 {
                 row[SHOOT] += MASKED_LOGIT;
             }
-            if self.actions > PASS && !pass_ok.is_empty() && !pass_ok[i] {
-                row[PASS] += MASKED_LOGIT;
+            if !banned.is_empty() {
+                mask_row(row, row_bans(banned, i, self.actions));
             }
             softmax(row);
         }

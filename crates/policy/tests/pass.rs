@@ -1,7 +1,8 @@
 //! A team with the `pass` action plays it only where the observation says a
 //! pass is possible (ball in kick reach, a receiver named by the protocol's
 //! pass rule), in process exactly as over the socket; a team with the
-//! `support` action walks to where a pass can reach it.
+//! `support` action walks to where a pass can reach it, and one with roles
+//! leaves walking and turning to its chaser.
 
 use std::f32::consts::PI;
 use std::path::Path;
@@ -21,15 +22,23 @@ fn pass_loving_team() -> LearnedPolicy {
 /// `pass` and `support`), the last with a bias that makes it the greedy
 /// choice wherever it is allowed.
 fn loving_team(favourite: usize) -> LearnedPolicy {
+    team_loving(favourite, favourite, false)
+}
+
+/// The shipped seed-1 team given outputs up to `last` (`pass`, or `pass`
+/// and `support`), with `roles` as given and a bias that makes `favourite`
+/// the greedy choice wherever it is allowed.
+fn team_loving(last: usize, favourite: usize, roles: bool) -> LearnedPolicy {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/policies/ppo-team-seed1");
     let mut cfg = PlayConfig::read(&dir.join("config.json")).unwrap();
     let d = cfg.ppo.decision.as_mut().unwrap();
     d.pass = true;
-    d.support = favourite == SUPPORT;
-    let extra = favourite + 1 - five_outputs(&dir);
+    d.support = last == SUPPORT;
+    d.roles = roles;
+    let extra = last + 1 - five_outputs(&dir);
     let five = Weights::read(&dir.join("final.safetensors")).unwrap();
     let mut w = Weights::default();
-    let last = five
+    let out = five
         .names()
         .filter(|n| n.starts_with("actor.") && n.ends_with(".bias"))
         .max()
@@ -39,18 +48,18 @@ fn loving_team(favourite: usize) -> LearnedPolicy {
     for name in five.names() {
         let (shape, data) = five.get(name).unwrap();
         let (mut shape, mut data) = (shape.to_vec(), data.to_vec());
-        if name == format!("{last}.weight") {
+        if name == format!("{out}.weight") {
             data.extend(std::iter::repeat_n(0.0, shape[1] * extra));
             shape[0] += extra;
-        } else if name == format!("{last}.bias") {
-            data.extend(std::iter::repeat_n(0.0, extra - 1));
-            data.push(1e3);
+        } else if name == format!("{out}.bias") {
+            data.extend(std::iter::repeat_n(0.0, extra));
+            data[favourite] += 1e3;
             shape[0] += extra;
         }
         w.insert(name, shape, data);
     }
     let mut team = LearnedPolicy::from_weights(&cfg, &w, "loving".into()).unwrap();
-    assert_eq!(team.actions(), favourite + 1);
+    assert_eq!(team.actions(), last + 1);
     team.set_match_seed(1);
     team
 }
@@ -143,4 +152,48 @@ fn support_walks_a_robot_to_where_a_pass_reaches_it() {
     assert_eq!(joint[2], Action::Stay, "arrived, it stands");
     let kicker = m.observe(Team::Blue, 1);
     assert_eq!(naosoccer_proto::pass_receiver(&kicker), Some(2));
+}
+
+/// With roles only the chaser (the standing robot nearest the ball; on a
+/// tie the lower player number) may walk `forward` or turn: a team that
+/// loves `forward` walks its chaser and sends the others to `support` or
+/// `stay`, whoever asks, and a fallen robot hands the chase on.
+#[test]
+fn roles_leave_walking_and_turning_to_the_chaser() {
+    use naosoccer_policy::actions::{banned_actions, is_chaser, ROLE_BANNED};
+    let mut team = team_loving(SUPPORT, 0, true);
+    // Blue 1 has the ball at its feet; blue 2 stands 1.9 m from it.
+    let m = staged((-2.0, 1.5));
+    let chaser = m.observe(Team::Blue, 1);
+    assert!(is_chaser(&chaser));
+    assert_eq!(team.act(&chaser), Action::Forward);
+    let p = team.probabilities_for(std::slice::from_ref(&chaser));
+    assert!(p[0] > 0.999, "{p:?}");
+    let mut other = m.observe(Team::Blue, 2);
+    assert!(!is_chaser(&other));
+    let p = team.probabilities_for(std::slice::from_ref(&other));
+    assert!(p[..3].iter().all(|&x| x < 1e-6), "{p:?}");
+    assert!((p[SUPPORT..].iter().sum::<f32>() + p[4] - 1.0).abs() < 1e-4);
+    let d = team.decision().unwrap();
+    let in_reach = false;
+    assert_eq!(
+        banned_actions(&other, in_reach, &d),
+        ROLE_BANNED | 1 << PASS
+    );
+    // Without roles the same robot may walk.
+    let mut free = d;
+    free.roles = false;
+    assert_eq!(banned_actions(&other, in_reach, &free), 1 << PASS);
+    // The chaser falls: blue 2, the nearest standing robot, chases.
+    other.own[1].fallen = true;
+    assert!(is_chaser(&other));
+    // A tie goes to the lower player number.
+    other.own[3] = other.own[2];
+    assert!(is_chaser(&other));
+    other.player = naosoccer_proto::Player::new(3).unwrap();
+    assert!(!is_chaser(&other));
+    // A lying robot never chases.
+    let mut lying = m.observe(Team::Blue, 1);
+    lying.own[1].fallen = true;
+    assert!(!is_chaser(&lying));
 }
