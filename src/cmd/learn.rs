@@ -119,7 +119,8 @@ pub struct TrainArgs {
     /// optimiser; the networks must have the run's shape, except that a
     /// team trained without `pass` or `support` gains them (with
     /// --pass-action and --support-action): `pass` starts as a copy of
-    /// `shoot`, `support` as `forward` made about 2.7 times less likely.
+    /// `shoot`, `support` as `forward` made about 2.7 times less likely
+    /// (see --pass-init and --support-init-bias).
     #[arg(long, value_name = "DIR|FILE", conflicts_with = "resume")]
     init_from: Option<PathBuf>,
     /// With --init-from and --pass-action, from a team trained without
@@ -128,6 +129,13 @@ pub struct TrainArgs {
     /// kicker that tries `pass` where it used to turn with the ball.
     #[arg(long, value_name = "ACTION", requires_all = ["init_from", "pass_action"])]
     pass_init: Option<naosoccer_proto::Action>,
+    /// With --init-from and --support-action, from a team trained without
+    /// `support`: start `support`'s bias this many logits below
+    /// `forward`'s (its weights are a copy of `forward`'s). 1 (the
+    /// default) makes it about 2.7 times less likely than `forward`; 0
+    /// starts it as likely.
+    #[arg(long, value_name = "LOGITS", requires_all = ["init_from", "support_action"], allow_negative_numbers = true)]
+    support_init_bias: Option<f32>,
     /// PPO: the critic reads the whole team's observations (MAPPO).
     #[arg(long)]
     central_critic: bool,
@@ -308,6 +316,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     }
     cfg.init_from = a.init_from.clone();
     cfg.init_pass_from = a.pass_init;
+    cfg.init_support_bias = a.support_init_bias;
     if let Some(v) = a.obs_version {
         cfg.obs_version = v;
     }

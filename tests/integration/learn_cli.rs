@@ -273,12 +273,13 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
 }
 
 /// `train --pass-action --support-action --support-hold 40 --support-roles
-/// --init-from --pass-init turn_left`: a shipped team seeds a run with
-/// `pass`, a held `support` and roles; the run records all four and where
-/// `pass` started, and plays over the socket-free eval path;
-/// `--support-action` alone is refused, as are `--support-hold` and
-/// `--support-roles` without it, the support action without the team
-/// preset, and `--pass-init` without `--init-from`.
+/// --init-from --pass-init turn_left --support-init-bias 0`: a shipped team
+/// seeds a run with `pass`, a held `support` and roles; the run records
+/// all four and where `pass` and `support` started, and plays over the
+/// socket-free eval path; `--support-action` alone is refused, as are
+/// `--support-hold`, `--support-roles` and `--support-init-bias` without
+/// it, the support action without the team preset, and `--pass-init`
+/// without `--init-from`.
 #[cfg(feature = "train")]
 #[test]
 fn support_action_runs_start_from_a_shipped_team_and_play() {
@@ -297,6 +298,8 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         &shipped,
         "--pass-init",
         "turn_left",
+        "--support-init-bias",
+        "0",
         "--out",
         run_s,
     ]);
@@ -313,6 +316,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     assert_eq!(config["ppo"]["decision"]["support_hold"], 40);
     assert_eq!(config["ppo"]["decision"]["roles"], true);
     assert_eq!(config["init_pass_from"], "turn_left");
+    assert_eq!(config["init_support_bias"], 0.0);
     let out = naosoccer(&[
         "eval",
         "--blue",
@@ -347,6 +351,23 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     assert!(
         !out.status.success(),
         "--support-hold needs --support-action"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--support-action"), "{err}");
+    let mut a = base.to_vec();
+    a.extend([
+        "--pass-action",
+        "--init-from",
+        &shipped,
+        "--support-init-bias",
+        "0",
+        "--out",
+        other_s,
+    ]);
+    let out = naosoccer(&a);
+    assert!(
+        !out.status.success(),
+        "--support-init-bias needs --support-action"
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--support-action"), "{err}");

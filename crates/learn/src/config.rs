@@ -107,6 +107,11 @@ pub struct TrainConfig {
     /// where it used to turn with the ball (docs/LEARNING.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub init_pass_from: Option<naosoccer_proto::Action>,
+    /// With `init_from`: how much lower (in logits) a gained `support`
+    /// row's bias starts than `forward`'s ([`crate::train::SUPPORT_INIT_BIAS`]
+    /// when unset; 0 starts `support` as likely as `forward`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub init_support_bias: Option<f32>,
 }
 
 impl TrainConfig {
@@ -131,6 +136,7 @@ impl TrainConfig {
             pass_drills: None,
             init_from: None,
             init_pass_from: None,
+            init_support_bias: None,
         }
     }
 }

@@ -302,6 +302,20 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             "--init-from starts PPO team-preset runs (--algo ppo --preset team) only".into(),
         ));
     }
+    if cfg.init_support_bias.is_some()
+        && (cfg.init_from.is_none() || !cfg.ppo.decision.is_some_and(|d| d.support))
+    {
+        return Err(LearnError::Config(
+            "--support-init-bias sets where a gained support row starts: it needs --init-from \
+             and --support-action"
+                .into(),
+        ));
+    }
+    if cfg.init_support_bias.is_some_and(|b| !b.is_finite()) {
+        return Err(LearnError::Config(
+            "--support-init-bias must be a finite number".into(),
+        ));
+    }
     if cfg.init_pass_from.is_some()
         && (cfg.init_from.is_none() || !cfg.ppo.decision.is_some_and(|d| d.pass))
     {
@@ -525,7 +539,8 @@ fn train_ppo_decisions(
         None => {
             if let Some(from) = &cfg.init_from {
                 let pass_from = cfg.init_pass_from.unwrap_or(naosoccer_proto::Action::Shoot);
-                init_weights(&mut ppo, from, pass_from)?;
+                let support_bias = cfg.init_support_bias.unwrap_or(SUPPORT_INIT_BIAS);
+                init_weights(&mut ppo, from, pass_from, support_bias)?;
             }
             let run = RunDir::create(out, cfg)?;
             let sched = start_schedule(cfg, out, &mut env, &ppo)?;
@@ -781,6 +796,7 @@ pub fn init_weights(
     ppo: &mut Ppo,
     path: &Path,
     pass_from: naosoccer_proto::Action,
+    support_bias: f32,
 ) -> Result<(), LearnError> {
     use crate::ppo::PASS;
     use naosoccer_policy::SUPPORT;
@@ -813,8 +829,8 @@ pub fn init_weights(
         tch::no_grad(|| -> Result<(), LearnError> {
             // The actor's output layer may gain rows: `pass` (a copy of
             // `pass_from`, by default `shoot`) and `support` (a copy of
-            // `forward`, its bias lowered by SUPPORT_INIT_BIAS so that it
-            // starts rarer than `forward`).
+            // `forward`, its bias lowered by `support_bias`, by default
+            // SUPPORT_INIT_BIAS so that it starts rarer than `forward`).
             let widen = name.starts_with("actor.")
                 && !want.is_empty()
                 && want[1..] == got[1..]
@@ -832,7 +848,7 @@ pub fn init_weights(
                 if want[0] == SUPPORT as i64 + 1 {
                     let forward = src.narrow(0, naosoccer_policy::actions::FORWARD as i64, 1);
                     let row = if want.len() == 1 {
-                        forward - f64::from(SUPPORT_INIT_BIAS)
+                        forward - f64::from(support_bias)
                     } else {
                         forward.shallow_clone()
                     };

@@ -1180,7 +1180,7 @@ fn actor_logits(p: &naosoccer_learn::ppo::Ppo, rows: &[f32], n: usize) -> Vec<f3
 #[test]
 fn init_from_widens_the_actor_for_the_pass_action() {
     use naosoccer_learn::ppo::{Ppo, PpoConfig, Preset, PASS, SHOOT};
-    use naosoccer_learn::train::init_weights;
+    use naosoccer_learn::train::{init_weights, SUPPORT_INIT_BIAS};
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
     let five = PpoConfig::preset(Preset::Team);
@@ -1201,7 +1201,7 @@ fn init_from_widens_the_actor_for_the_pass_action() {
     let logits = |p: &Ppo| actor_logits(p, &rows, n);
     let before = logits(&src);
     let mut dst = Ppo::new(six.clone(), &scale, 4).unwrap();
-    init_weights(&mut dst, &dir, Action::Shoot).unwrap();
+    init_weights(&mut dst, &dir, Action::Shoot, SUPPORT_INIT_BIAS).unwrap();
     let after = logits(&dst);
     // (A 6-wide product may round differently from a 5-wide one.)
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-6;
@@ -1218,7 +1218,7 @@ fn init_from_widens_the_actor_for_the_pass_action() {
     // `--pass-init turn_left`: pass starts as turn_left, the rest as before;
     // pass cannot start as itself.
     let mut turn = Ppo::new(six.clone(), &scale, 4).unwrap();
-    init_weights(&mut turn, &dir, Action::TurnLeft).unwrap();
+    init_weights(&mut turn, &dir, Action::TurnLeft, SUPPORT_INIT_BIAS).unwrap();
     let turned = logits(&turn);
     for i in 0..n {
         for a in 0..5 {
@@ -1233,34 +1233,40 @@ fn init_from_widens_the_actor_for_the_pass_action() {
         );
     }
     let mut itself = Ppo::new(six, &scale, 4).unwrap();
-    let err = init_weights(&mut itself, &dir, Action::Pass)
+    let err = init_weights(&mut itself, &dir, Action::Pass, SUPPORT_INIT_BIAS)
         .unwrap_err()
         .to_string();
     assert!(err.contains("cannot start as a copy of \"pass\""), "{err}");
     // Same shape: a plain copy. Another hidden width: refused.
     let mut same = Ppo::new(five.clone(), &scale, 4).unwrap();
-    init_weights(&mut same, &file, Action::Shoot).unwrap();
+    init_weights(&mut same, &file, Action::Shoot, SUPPORT_INIT_BIAS).unwrap();
     assert_eq!(logits(&same), before);
     let mut wide = five;
     wide.hidden = vec![32, 32];
     let mut other = Ppo::new(wide, &scale, 4).unwrap();
-    let err = init_weights(&mut other, &file, Action::Shoot)
+    let err = init_weights(&mut other, &file, Action::Shoot, SUPPORT_INIT_BIAS)
         .unwrap_err()
         .to_string();
     assert!(
         err.contains("actor.l0.bias") && err.contains("needs [32]"),
         "{err}"
     );
-    let err = init_weights(&mut same, &dir.join("missing.safetensors"), Action::Shoot)
-        .unwrap_err()
-        .to_string();
+    let err = init_weights(
+        &mut same,
+        &dir.join("missing.safetensors"),
+        Action::Shoot,
+        SUPPORT_INIT_BIAS,
+    )
+    .unwrap_err()
+    .to_string();
     assert!(err.contains("no such weights file"), "{err}");
 }
 
 /// `--init-from` with `support`: a five-action team and a six-action
 /// (`pass`) one both seed a seven-action actor. The old logits carry over,
 /// `pass` starts as `shoot`, and `support` as `forward` lowered by
-/// `SUPPORT_INIT_BIAS`; a wider source is refused.
+/// `SUPPORT_INIT_BIAS` (or by the bias given: 0 starts it level with
+/// `forward`); a wider source is refused.
 #[test]
 fn init_from_widens_the_actor_for_the_support_action() {
     use naosoccer_learn::ppo::{Ppo, PpoConfig, Preset, PASS, SHOOT};
@@ -1289,8 +1295,15 @@ fn init_from_widens_the_actor_for_the_support_action() {
         naosoccer_learn::policy::save_stores(&[&src.net.vs], &file).unwrap();
         let before = logits(&src);
         let mut dst = Ppo::new(seven.clone(), &scale, 4).unwrap();
-        init_weights(&mut dst, &file, Action::Shoot).unwrap();
+        init_weights(&mut dst, &file, Action::Shoot, SUPPORT_INIT_BIAS).unwrap();
         let after = logits(&dst);
+        // `--support-init-bias 0`: `support` starts exactly as `forward`.
+        let mut even = Ppo::new(seven.clone(), &scale, 4).unwrap();
+        init_weights(&mut even, &file, Action::Shoot, 0.0).unwrap();
+        let level = logits(&even);
+        for i in 0..n {
+            assert!(close(level[i * 7 + SUPPORT], before[i * k]), "{k}: row {i}");
+        }
         for i in 0..n {
             for a in 0..k {
                 assert!(
@@ -1313,7 +1326,7 @@ fn init_from_widens_the_actor_for_the_support_action() {
             let mut back = Ppo::new(PpoConfig::preset(Preset::Team), &scale, 4).unwrap();
             let wide = dir.join("from7.safetensors");
             naosoccer_learn::policy::save_stores(&[&dst.net.vs], &wide).unwrap();
-            let err = init_weights(&mut back, &wide, Action::Shoot)
+            let err = init_weights(&mut back, &wide, Action::Shoot, SUPPORT_INIT_BIAS)
                 .unwrap_err()
                 .to_string();
             assert!(err.contains("needs [5"), "{err}");
