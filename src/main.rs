@@ -31,7 +31,7 @@ enum Command {
     Render(cmd::record::RenderArgs),
     /// Train a DQN or PPO team in process (checkpoints, metrics CSV).
     #[cfg(feature = "train")]
-    Train(cmd::learn::TrainArgs),
+    Train(Box<cmd::learn::TrainArgs>),
     /// Train a DQN or PPO team (needs the `train` feature, libtorch: run it
     /// for what to build).
     #[cfg(not(feature = "train"))]
@@ -62,7 +62,7 @@ fn main() -> std::process::ExitCode {
         Command::Bench(b) => cmd::bench::run(b),
         Command::Eval(args) => cmd::eval::eval_cmd(args),
         #[cfg(feature = "train")]
-        Command::Train(args) => cmd::learn::train_cmd(args),
+        Command::Train(args) => cmd::learn::train_cmd(*args),
         #[cfg(feature = "train")]
         Command::Plot(args) => cmd::learn::plot_cmd(args),
         #[cfg(not(feature = "train"))]

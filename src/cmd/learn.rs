@@ -106,14 +106,16 @@ pub struct TrainArgs {
     /// `eval` and over the socket. 0: off.
     #[arg(long, value_name = "TICKS", requires = "support_action")]
     support_hold: Option<u32>,
-    /// With --support-action: roles. Only the team's chaser (the standing
-    /// robot nearest the ball; on a tie the lower player number) may walk
-    /// `forward` or turn; the others choose among `support`, `stay` and,
-    /// with the ball in reach, `shoot` and `pass`. Read from each robot's
-    /// own observation and recorded in the run's configuration, so the team
-    /// plays the same way in `match`, `eval` and over the socket.
-    #[arg(long, requires = "support_action")]
-    support_roles: bool,
+    /// With --support-action: roles. Only the team's CHASERS (1 to 3)
+    /// standing robots nearest the ball (on a tie the lower player number
+    /// is nearer) may walk `forward` or turn; the others choose among
+    /// `support`, `stay` and, with the ball in reach, `shoot` and `pass`.
+    /// Read from each robot's own observation and recorded in the run's
+    /// configuration, so the team plays the same way in `match`, `eval`
+    /// and over the socket.
+    #[arg(long, value_name = "CHASERS", requires = "support_action",
+          value_parser = clap::value_parser!(u32).range(1..=3))]
+    support_roles: Option<u32>,
     /// PPO team preset: start from these weights (a run directory's
     /// final.safetensors, or a .safetensors checkpoint) with a fresh
     /// optimiser; the networks must have the run's shape, except that a
@@ -307,7 +309,9 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         if let Some(k) = a.support_hold {
             d.support_hold = k;
         }
-        d.roles = a.support_roles;
+        if let Some(n) = a.support_roles {
+            d.chasers = n;
+        }
     } else {
         anyhow::ensure!(
             a.persist.is_none() && !a.no_shoot_mask && !a.pass_action && !a.support_action,

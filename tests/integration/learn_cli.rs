@@ -272,7 +272,7 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
     ]
 }
 
-/// `train --pass-action --support-action --support-hold 40 --support-roles
+/// `train --pass-action --support-action --support-hold 40 --support-roles 2
 /// --init-from --pass-init turn_left --support-init-bias 0`: a shipped team
 /// seeds a run with `pass`, a held `support` and roles; the run records
 /// all four and where `pass` and `support` started, and plays over the
@@ -294,6 +294,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         "--support-hold",
         "40",
         "--support-roles",
+        "2",
         "--init-from",
         &shipped,
         "--pass-init",
@@ -314,7 +315,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     assert_eq!(config["ppo"]["decision"]["pass"], true);
     assert_eq!(config["ppo"]["decision"]["support"], true);
     assert_eq!(config["ppo"]["decision"]["support_hold"], 40);
-    assert_eq!(config["ppo"]["decision"]["roles"], true);
+    assert_eq!(config["ppo"]["decision"]["chasers"], 2);
     assert_eq!(config["init_pass_from"], "turn_left");
     assert_eq!(config["init_support_bias"], 0.0);
     let out = naosoccer(&[
@@ -372,7 +373,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--support-action"), "{err}");
     let mut a = base.to_vec();
-    a.extend(["--pass-action", "--support-roles", "--out", other_s]);
+    a.extend(["--pass-action", "--support-roles", "1", "--out", other_s]);
     let out = naosoccer(&a);
     assert!(
         !out.status.success(),

@@ -169,7 +169,7 @@ impl DqnConfig {
                 pass: false,
                 support: false,
                 support_hold: 0,
-                roles: false,
+                chasers: 0,
             }),
         }
     }

@@ -184,7 +184,7 @@ impl PpoConfig {
                 pass: false,
                 support: false,
                 support_hold: 0,
-                roles: false,
+                chasers: 0,
             }),
         }
     }

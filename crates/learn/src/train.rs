@@ -290,11 +290,20 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             "--support-hold holds the support action: it needs --support-action".into(),
         ));
     }
-    if decisions.iter().flatten().any(|d| d.roles && !d.support) {
+    if decisions
+        .iter()
+        .flatten()
+        .any(|d| d.chasers > 0 && !d.support)
+    {
         return Err(LearnError::Config(
             "--support-roles sends the robots away from the ball to support: it needs \
              --support-action"
                 .into(),
+        ));
+    }
+    if decisions.iter().flatten().any(|d| d.chasers >= 4) {
+        return Err(LearnError::Config(
+            "--support-roles names how many of the four robots chase: 1 to 3".into(),
         ));
     }
     if cfg.init_from.is_some() && (cfg.algo != Algo::Ppo || cfg.ppo.decision.is_none()) {

@@ -465,7 +465,7 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
         pass: false,
         support: false,
         support_hold: 0,
-        roles: false,
+        chasers: 0,
     };
     let half = [4.5, 3.0];
     let mut h = Hold::default();
@@ -524,7 +524,7 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
         pass: true,
         support: true,
         support_hold: 30,
-        roles: false,
+        chasers: 0,
     };
     let mut h = Hold::default();
     assert!(h.must_decide(&at(0, -2.0, (0.0, 0.0))));

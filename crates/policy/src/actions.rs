@@ -90,14 +90,14 @@ pub struct DecisionConfig {
     /// configurations): `support` holds `persist` ticks like any movement.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub support_hold: u32,
-    /// With `support`: roles. Only the team's chaser ([`is_chaser`]: the
-    /// standing robot nearest the ball) may `forward` or turn; the others
+    /// With `support`: roles. Only the team's `chasers` standing robots
+    /// nearest the ball ([`is_chaser`]) may `forward` or turn; the others
     /// choose among `support`, `stay` and, with the ball in reach, `shoot`
     /// and `pass`, so that the robots away from the ball stand where a pass
-    /// can reach them instead of crowding it. Absent from older runs'
-    /// configurations: `false`.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub roles: bool,
+    /// can reach them instead of crowding it. 0 (and absent from older
+    /// runs' configurations): no roles.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub chasers: u32,
 }
 
 fn is_zero(v: &u32) -> bool {
@@ -190,38 +190,43 @@ pub fn pass_possible(obs: &Observation, in_reach: bool) -> bool {
     in_reach && naosoccer_proto::pass_receiver(obs).is_some()
 }
 
-/// Whether the robot that received `obs` is its team's chaser under
-/// [`DecisionConfig::roles`]: it stands, and no standing teammate is nearer
-/// the ball (on a tie, the lower player number chases). Read from the
-/// observation alone, so in-process and socket play agree.
-pub fn is_chaser(obs: &Observation) -> bool {
+/// Whether the robot that received `obs` is one of its team's `chasers`
+/// under [`DecisionConfig::chasers`]: it stands, and fewer than `chasers`
+/// standing teammates are nearer the ball (on a tie, the lower player
+/// number is nearer). Read from the observation alone, so in-process and
+/// socket play agree.
+pub fn is_chaser(obs: &Observation, chasers: u32) -> bool {
     let me = obs.player.index();
     if obs.own[me].fallen {
         return false;
     }
     let d = |r: &naosoccer_proto::RobotObs| (r.x - obs.ball.x).hypot(r.y - obs.ball.y);
     let mine = d(&obs.own[me]);
-    !obs.own
+    let nearer = obs
+        .own
         .iter()
         .enumerate()
-        .any(|(j, r)| j != me && !r.fallen && (d(r) < mine || (d(r) == mine && j < me)))
+        .filter(|&(j, r)| j != me && !r.fallen && (d(r) < mine || (d(r) == mine && j < me)))
+        .count();
+    nearer < chasers as usize
 }
 
-/// The actions a robot that is not its team's chaser may not choose under
-/// [`DecisionConfig::roles`], as bits (`1 << index`): `forward` and the turns.
+/// The actions a robot that is not one of its team's chasers may not choose
+/// under [`DecisionConfig::chasers`], as bits (`1 << index`): `forward` and
+/// the turns.
 pub const ROLE_BANNED: u8 = 1 << FORWARD | 1 << TURN_LEFT | 1 << TURN_RIGHT;
 
 /// The actions, beyond a `shoot` out of reach, that the robot that received
 /// `obs` may not choose now under `decision`, as bits (`1 << index`):
 /// `pass` without a receiver or out of reach (`in_reach`, from the
-/// encoder), and [`ROLE_BANNED`] for a robot that is not the chaser under
-/// [`DecisionConfig::roles`].
+/// encoder), and [`ROLE_BANNED`] for a robot that is not a chaser under
+/// [`DecisionConfig::chasers`].
 pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> u8 {
     let mut banned = 0;
     if decision.pass && !pass_possible(obs, in_reach) {
         banned |= 1 << PASS;
     }
-    if decision.roles && !is_chaser(obs) {
+    if decision.chasers > 0 && !is_chaser(obs, decision.chasers) {
         banned |= ROLE_BANNED;
     }
     banned

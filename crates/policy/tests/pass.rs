@@ -2,7 +2,7 @@
 //! pass is possible (ball in kick reach, a receiver named by the protocol's
 //! pass rule), in process exactly as over the socket; a team with the
 //! `support` action walks to where a pass can reach it, and one with roles
-//! leaves walking and turning to its chaser.
+//! leaves walking and turning to its chasers.
 
 use std::f32::consts::PI;
 use std::path::Path;
@@ -22,19 +22,19 @@ fn pass_loving_team() -> LearnedPolicy {
 /// `pass` and `support`), the last with a bias that makes it the greedy
 /// choice wherever it is allowed.
 fn loving_team(favourite: usize) -> LearnedPolicy {
-    team_loving(favourite, favourite, false)
+    team_loving(favourite, favourite, 0)
 }
 
 /// The shipped seed-1 team given outputs up to `last` (`pass`, or `pass`
-/// and `support`), with `roles` as given and a bias that makes `favourite`
-/// the greedy choice wherever it is allowed.
-fn team_loving(last: usize, favourite: usize, roles: bool) -> LearnedPolicy {
+/// and `support`), with `chasers` as given and a bias that makes
+/// `favourite` the greedy choice wherever it is allowed.
+fn team_loving(last: usize, favourite: usize, chasers: u32) -> LearnedPolicy {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/policies/ppo-team-seed1");
     let mut cfg = PlayConfig::read(&dir.join("config.json")).unwrap();
     let d = cfg.ppo.decision.as_mut().unwrap();
     d.pass = true;
     d.support = last == SUPPORT;
-    d.roles = roles;
+    d.chasers = chasers;
     let extra = last + 1 - five_outputs(&dir);
     let five = Weights::read(&dir.join("final.safetensors")).unwrap();
     let mut w = Weights::default();
@@ -154,23 +154,27 @@ fn support_walks_a_robot_to_where_a_pass_reaches_it() {
     assert_eq!(naosoccer_proto::pass_receiver(&kicker), Some(2));
 }
 
-/// With roles only the chaser (the standing robot nearest the ball; on a
-/// tie the lower player number) may walk `forward` or turn: a team that
-/// loves `forward` walks its chaser and sends the others to `support` or
-/// `stay`, whoever asks, and a fallen robot hands the chase on.
+/// With one chaser only the standing robot nearest the ball (on a tie the
+/// lower player number) may walk `forward` or turn: a team that loves
+/// `forward` walks its chaser and sends the others to `support` or `stay`,
+/// whoever asks, and a fallen robot hands the chase on. With two, the two
+/// nearest chase.
 #[test]
-fn roles_leave_walking_and_turning_to_the_chaser() {
+fn roles_leave_walking_and_turning_to_the_chasers() {
     use naosoccer_policy::actions::{banned_actions, is_chaser, ROLE_BANNED};
-    let mut team = team_loving(SUPPORT, 0, true);
+    let mut team = team_loving(SUPPORT, 0, 1);
     // Blue 1 has the ball at its feet; blue 2 stands 1.9 m from it.
     let m = staged((-2.0, 1.5));
     let chaser = m.observe(Team::Blue, 1);
-    assert!(is_chaser(&chaser));
+    assert!(is_chaser(&chaser, 1));
     assert_eq!(team.act(&chaser), Action::Forward);
     let p = team.probabilities_for(std::slice::from_ref(&chaser));
     assert!(p[0] > 0.999, "{p:?}");
     let mut other = m.observe(Team::Blue, 2);
-    assert!(!is_chaser(&other));
+    assert!(!is_chaser(&other, 1));
+    // Blue 2 is the second nearest: with two chasers it chases, blue 0 not.
+    assert!(is_chaser(&other, 2));
+    assert!(!is_chaser(&m.observe(Team::Blue, 0), 2));
     let p = team.probabilities_for(std::slice::from_ref(&other));
     assert!(p[..3].iter().all(|&x| x < 1e-6), "{p:?}");
     assert!((p[SUPPORT..].iter().sum::<f32>() + p[4] - 1.0).abs() < 1e-4);
@@ -182,18 +186,19 @@ fn roles_leave_walking_and_turning_to_the_chaser() {
     );
     // Without roles the same robot may walk.
     let mut free = d;
-    free.roles = false;
+    free.chasers = 0;
     assert_eq!(banned_actions(&other, in_reach, &free), 1 << PASS);
     // The chaser falls: blue 2, the nearest standing robot, chases.
     other.own[1].fallen = true;
-    assert!(is_chaser(&other));
+    assert!(is_chaser(&other, 1));
     // A tie goes to the lower player number.
     other.own[3] = other.own[2];
-    assert!(is_chaser(&other));
+    assert!(is_chaser(&other, 1));
     other.player = naosoccer_proto::Player::new(3).unwrap();
-    assert!(!is_chaser(&other));
+    assert!(!is_chaser(&other, 1));
+    assert!(is_chaser(&other, 2));
     // A lying robot never chases.
     let mut lying = m.observe(Team::Blue, 1);
     lying.own[1].fallen = true;
-    assert!(!is_chaser(&lying));
+    assert!(!is_chaser(&lying, 3));
 }
