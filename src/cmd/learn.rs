@@ -116,6 +116,11 @@ pub struct TrainArgs {
     #[arg(long, value_name = "CHASERS", requires = "support_action",
           value_parser = clap::value_parser!(u32).range(1..=3))]
     support_roles: Option<u32>,
+    /// With --support-roles: the robots that do not chase may not `stay`
+    /// either, so they always walk to or hold their support spot (where a
+    /// pass can reach them) unless the ball is in their reach.
+    #[arg(long, requires = "support_roles")]
+    support_only: bool,
     /// PPO team preset: start from these weights (a run directory's
     /// final.safetensors, or a .safetensors checkpoint) with a fresh
     /// optimiser; the networks must have the run's shape, except that a
@@ -312,6 +317,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         if let Some(n) = a.support_roles {
             d.chasers = n;
         }
+        d.support_only = a.support_only;
     } else {
         anyhow::ensure!(
             a.persist.is_none() && !a.no_shoot_mask && !a.pass_action && !a.support_action,

@@ -273,7 +273,7 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
 }
 
 /// `train --pass-action --support-action --support-hold 40 --support-roles 2
-/// --init-from --pass-init turn_left --support-init-bias 0`: a shipped team
+/// --support-only --init-from --pass-init turn_left --support-init-bias 0`: a shipped team
 /// seeds a run with `pass`, a held `support` and roles; the run records
 /// all four and where `pass` and `support` started, and plays over the
 /// socket-free eval path; `--support-action` alone is refused, as are
@@ -295,6 +295,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         "40",
         "--support-roles",
         "2",
+        "--support-only",
         "--init-from",
         &shipped,
         "--pass-init",
@@ -316,6 +317,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     assert_eq!(config["ppo"]["decision"]["support"], true);
     assert_eq!(config["ppo"]["decision"]["support_hold"], 40);
     assert_eq!(config["ppo"]["decision"]["chasers"], 2);
+    assert_eq!(config["ppo"]["decision"]["support_only"], true);
     assert_eq!(config["init_pass_from"], "turn_left");
     assert_eq!(config["init_support_bias"], 0.0);
     let out = naosoccer(&[

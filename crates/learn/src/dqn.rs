@@ -170,6 +170,7 @@ impl DqnConfig {
                 support: false,
                 support_hold: 0,
                 chasers: 0,
+                support_only: false,
             }),
         }
     }

@@ -185,6 +185,7 @@ impl PpoConfig {
                 support: false,
                 support_hold: 0,
                 chasers: 0,
+                support_only: false,
             }),
         }
     }

@@ -301,6 +301,16 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
                 .into(),
         ));
     }
+    if decisions
+        .iter()
+        .flatten()
+        .any(|d| d.support_only && d.chasers == 0)
+    {
+        return Err(LearnError::Config(
+            "--support-only applies to the robots that do not chase: it needs --support-roles"
+                .into(),
+        ));
+    }
     if decisions.iter().flatten().any(|d| d.chasers >= 4) {
         return Err(LearnError::Config(
             "--support-roles names how many of the four robots chase: 1 to 3".into(),

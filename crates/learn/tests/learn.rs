@@ -466,6 +466,7 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
         support: false,
         support_hold: 0,
         chasers: 0,
+        support_only: false,
     };
     let half = [4.5, 3.0];
     let mut h = Hold::default();
@@ -525,6 +526,7 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
         support: true,
         support_hold: 30,
         chasers: 0,
+        support_only: false,
     };
     let mut h = Hold::default();
     assert!(h.must_decide(&at(0, -2.0, (0.0, 0.0))));

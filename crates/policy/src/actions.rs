@@ -98,6 +98,12 @@ pub struct DecisionConfig {
     /// runs' configurations): no roles.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub chasers: u32,
+    /// With `chasers`: the robots that do not chase may not `stay` either
+    /// ([`SUPPORT_ONLY_BANNED`]), so they always walk to or hold their
+    /// support spot unless the ball is in reach. Absent from older runs'
+    /// configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub support_only: bool,
 }
 
 fn is_zero(v: &u32) -> bool {
@@ -216,18 +222,27 @@ pub fn is_chaser(obs: &Observation, chasers: u32) -> bool {
 /// the turns.
 pub const ROLE_BANNED: u8 = 1 << FORWARD | 1 << TURN_LEFT | 1 << TURN_RIGHT;
 
+/// What a robot that does not chase may not choose under
+/// [`DecisionConfig::support_only`]: [`ROLE_BANNED`] and `stay`.
+pub const SUPPORT_ONLY_BANNED: u8 = ROLE_BANNED | 1 << STAY;
+
 /// The actions, beyond a `shoot` out of reach, that the robot that received
 /// `obs` may not choose now under `decision`, as bits (`1 << index`):
 /// `pass` without a receiver or out of reach (`in_reach`, from the
 /// encoder), and [`ROLE_BANNED`] for a robot that is not a chaser under
-/// [`DecisionConfig::chasers`].
+/// [`DecisionConfig::chasers`] ([`SUPPORT_ONLY_BANNED`] with
+/// [`DecisionConfig::support_only`]).
 pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> u8 {
     let mut banned = 0;
     if decision.pass && !pass_possible(obs, in_reach) {
         banned |= 1 << PASS;
     }
     if decision.chasers > 0 && !is_chaser(obs, decision.chasers) {
-        banned |= ROLE_BANNED;
+        banned |= if decision.support_only {
+            SUPPORT_ONLY_BANNED
+        } else {
+            ROLE_BANNED
+        };
     }
     banned
 }

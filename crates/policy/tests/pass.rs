@@ -158,10 +158,10 @@ fn support_walks_a_robot_to_where_a_pass_reaches_it() {
 /// lower player number) may walk `forward` or turn: a team that loves
 /// `forward` walks its chaser and sends the others to `support` or `stay`,
 /// whoever asks, and a fallen robot hands the chase on. With two, the two
-/// nearest chase.
+/// nearest chase; with `support_only` the others may not `stay` either.
 #[test]
 fn roles_leave_walking_and_turning_to_the_chasers() {
-    use naosoccer_policy::actions::{banned_actions, is_chaser, ROLE_BANNED};
+    use naosoccer_policy::actions::{banned_actions, is_chaser, ROLE_BANNED, SUPPORT_ONLY_BANNED};
     let mut team = team_loving(SUPPORT, 0, 1);
     // Blue 1 has the ball at its feet; blue 2 stands 1.9 m from it.
     let m = staged((-2.0, 1.5));
@@ -183,6 +183,17 @@ fn roles_leave_walking_and_turning_to_the_chasers() {
     assert_eq!(
         banned_actions(&other, in_reach, &d),
         ROLE_BANNED | 1 << PASS
+    );
+    // With support only it may not stay either.
+    let mut strict = d;
+    strict.support_only = true;
+    assert_eq!(
+        banned_actions(&other, in_reach, &strict),
+        SUPPORT_ONLY_BANNED | 1 << PASS
+    );
+    assert_eq!(
+        banned_actions(&chaser, true, &strict) & SUPPORT_ONLY_BANNED,
+        0
     );
     // Without roles the same robot may walk.
     let mut free = d;
