@@ -61,8 +61,11 @@ pub const STAY: usize = 4;
 /// A logit this low makes an action impossible (its probability underflows to 0).
 pub const MASKED_LOGIT: f32 = -1e9;
 
-/// The decision-level MDP (`team` presets).
+/// The decision-level MDP (`team` presets). A setting this build does not
+/// know is refused rather than ignored: a team trained with it would
+/// otherwise play here without it, silently differently.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DecisionConfig {
     /// Ticks a movement decision (`forward`, turns, `stay`) lasts before the
     /// robot decides again (a `shoot` lasts as long as the kick keeps it busy).

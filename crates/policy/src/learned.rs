@@ -742,4 +742,34 @@ mod tests {
         let err = LearnedPolicy::load(&format!("ppo:{}", dir.display())).unwrap_err();
         assert!(err.to_string().contains("no final.safetensors"), "{err}");
     }
+
+    /// A team whose decision section has a setting this build does not know
+    /// (a run from a newer build) is refused, naming the setting, instead
+    /// of playing without it.
+    #[test]
+    fn unknown_decision_settings_are_refused() {
+        let shipped =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/policies/ppo-team-seed1");
+        let dir = std::env::temp_dir().join("naosoccer-policy-unknown-decision");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::copy(
+            shipped.join("final.safetensors"),
+            dir.join("final.safetensors"),
+        )
+        .unwrap();
+        let mut cfg: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(shipped.join("config.json")).unwrap())
+                .unwrap();
+        std::fs::write(dir.join("config.json"), cfg.to_string()).unwrap();
+        let spec = format!("ppo:{}", dir.display());
+        assert!(
+            LearnedPolicy::load(&spec).is_ok(),
+            "the copy loads as it is"
+        );
+        cfg["ppo"]["decision"]["sidekicks"] = serde_json::json!(2);
+        std::fs::write(dir.join("config.json"), cfg.to_string()).unwrap();
+        let err = LearnedPolicy::load(&spec).unwrap_err().to_string();
+        assert!(err.contains("unknown field `sidekicks`"), "{err}");
+        assert!(err.contains("config.json"), "{err}");
+    }
 }
