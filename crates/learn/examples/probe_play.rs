@@ -193,6 +193,10 @@ fn main() {
     // Ball in kick reach with a teammate open where the kick would go.
     let mut pass_counts = [0u64; NAMES.len()];
     let (mut reach_ticks, mut cone_ticks) = (0u64, [0u64; 3]);
+    // In-reach ticks by the third of the pitch the ball is in (own, middle,
+    // opponents'), and of those how many the kicker faced its own half.
+    let mut thirds = [[0u64; 2]; 3];
+    let third_length = cfg.sim.field_length / 3.0;
     let mut bins = [[0u64; DISTANCES.len()]; BEARINGS.len()];
     // What became of blue's kicks: the first of a pass, the kicker's own
     // control again, an opponent's control, a goal, the ball out.
@@ -265,6 +269,9 @@ fn main() {
                     }
                     if in_reach {
                         reach_ticks += 1;
+                        let third = ((o.ball.x / third_length + 1.5).floor() as usize).min(2);
+                        thirds[third][0] += 1;
+                        thirds[third][1] += u64::from(o.me().heading.cos() < 0.0);
                         for (t, h) in cone_ticks.iter_mut().zip(mate_cones(o)) {
                             *t += u64::from(h);
                         }
@@ -367,6 +374,15 @@ fn main() {
         share(0),
         share(1),
         share(2)
+    );
+    let cells: Vec<String> = thirds
+        .iter()
+        .map(|[n, back]| format!("{n} ({:.2})", *back as f64 / (*n).max(1) as f64))
+        .collect();
+    println!(
+        "  ticks with the ball in reach in the own / middle / opponents' third of the pitch \
+         (in brackets, the share facing the own half): {}",
+        cells.join(" / ")
     );
     let total: u64 = bins.iter().flatten().sum();
     println!(
