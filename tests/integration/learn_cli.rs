@@ -339,62 +339,48 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
 
     let other = dir("cli_support_action_refused");
     let other_s = other.to_str().unwrap();
-    let mut a = base.to_vec();
-    a.extend(["--support-action", "--out", other_s]);
-    let out = naosoccer(&a);
-    assert!(
-        !out.status.success(),
-        "--support-action alone must be refused"
-    );
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--pass-action"), "{err}");
-    let mut a = base.to_vec();
-    a.extend(["--pass-action", "--support-hold", "40", "--out", other_s]);
-    let out = naosoccer(&a);
-    assert!(
-        !out.status.success(),
-        "--support-hold needs --support-action"
-    );
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--support-action"), "{err}");
-    let mut a = base.to_vec();
-    a.extend([
+    // `extra` after the short run's arguments is refused, with a message
+    // naming `needle`.
+    let refused = |extra: &[&str], needle: &str, why: &str| {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        a.extend(["--out", other_s]);
+        let out = naosoccer(&a);
+        assert!(!out.status.success(), "{why}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{err}");
+    };
+    refused(
+        &["--support-action"],
         "--pass-action",
+        "--support-action alone must be refused",
+    );
+    refused(
+        &["--pass-action", "--support-hold", "40"],
+        "--support-action",
+        "--support-hold needs --support-action",
+    );
+    refused(
+        &[
+            "--pass-action",
+            "--init-from",
+            &shipped,
+            "--support-init-bias",
+            "0",
+        ],
+        "--support-action",
+        "--support-init-bias needs --support-action",
+    );
+    refused(
+        &["--pass-action", "--support-roles", "1"],
+        "--support-action",
+        "--support-roles needs --support-action",
+    );
+    refused(
+        &["--pass-action", "--pass-init", "turn_left"],
         "--init-from",
-        &shipped,
-        "--support-init-bias",
-        "0",
-        "--out",
-        other_s,
-    ]);
-    let out = naosoccer(&a);
-    assert!(
-        !out.status.success(),
-        "--support-init-bias needs --support-action"
+        "--pass-init needs --init-from",
     );
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--support-action"), "{err}");
-    let mut a = base.to_vec();
-    a.extend(["--pass-action", "--support-roles", "1", "--out", other_s]);
-    let out = naosoccer(&a);
-    assert!(
-        !out.status.success(),
-        "--support-roles needs --support-action"
-    );
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--support-action"), "{err}");
-    let mut a = base.to_vec();
-    a.extend([
-        "--pass-action",
-        "--pass-init",
-        "turn_left",
-        "--out",
-        other_s,
-    ]);
-    let out = naosoccer(&a);
-    assert!(!out.status.success(), "--pass-init needs --init-from");
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--init-from"), "{err}");
     let mut a = base.to_vec();
     a[4] = "cleanrl";
     a.extend(["--pass-action", "--support-action", "--out", other_s]);

@@ -613,8 +613,8 @@ fn train_ppo_decisions(
     let (mut dec_rows, mut dec_obs, mut dec_cobs, mut dec_ok) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
-    // With the `pass` action: what each deciding robot may not choose.
-    let passes = decision.pass;
+    // What each deciding robot may not choose beyond a `shoot` out of
+    // reach (`pass` without a receiver, roles; nothing without them).
     let mut dec_banned = Vec::new();
     let (mut cut_rows, mut cut_cobs, mut cut_val) = (Vec::new(), Vec::new(), Vec::new());
     let mut out_rows = Vec::new();
@@ -640,9 +640,7 @@ fn train_ppo_decisions(
                     dec_obs.extend_from_slice(&env.observations()[r * OBS_DIM..(r + 1) * OBS_DIM]);
                     push_critic_row(env.observations(), l, r, scale.dim(), cw, &mut dec_cobs);
                     dec_ok.push(!cfg.ppo.masks_shoot() || scale.kick.in_reach(o));
-                    if passes {
-                        dec_banned.push(banned_actions(o, scale.kick.in_reach(o), &decision));
-                    }
+                    dec_banned.push(banned_actions(o, scale.kick.in_reach(o), &decision));
                 } else {
                     actions[r] = hold.held(o);
                 }
@@ -675,7 +673,7 @@ fn train_ppo_decisions(
                     logp: dec_logp[j],
                     value: dec_val[j],
                     shoot_ok: dec_ok[j],
-                    banned: dec_banned.get(j).copied().unwrap_or(0),
+                    banned: dec_banned[j],
                     reward: 0.0,
                     discount: 1.0,
                     elapsed: 0,
