@@ -121,13 +121,38 @@ pub struct TrainArgs {
     /// pass can reach them) unless the ball is in their reach.
     #[arg(long, requires = "support_roles")]
     support_only: bool,
+    /// With --support-action: where the support spot is. `ahead` (the
+    /// default): 1.5 m ahead of the ball toward the opponent goal and 1 m
+    /// to the side the robot is on. `facing`: 1.5 m beyond the ball on the
+    /// line from the teammate nearest the ball through the ball, and 1 m to
+    /// the side of that line the robot is on, which is where that teammate
+    /// faces when it reaches the ball, whichever way it comes from.
+    /// Recorded in the run's configuration. The reward's `support` shaping
+    /// keeps its own spot (ahead); set it to 0 in the config when the spots
+    /// differ.
+    #[arg(long, value_name = "SPOT", value_parser = ["ahead", "facing"],
+          requires = "support_action")]
+    support_spot: Option<String>,
+    /// With --support-action: give the robots an eighth action, `approach`,
+    /// a walk round behind the ball onto the line from it to the opponent
+    /// goal and then into the ball, so the robot reaches it facing that
+    /// goal (as the scripted team lines up). The team's policy turns it
+    /// into `forward` and turns each tick. With --support-roles only the
+    /// chasers may `approach`. Recorded in the run's configuration.
+    #[arg(long, requires = "support_action")]
+    approach_action: bool,
+    /// With --approach-action: no robot may walk `forward` or turn; they
+    /// move by `approach` and `support` only (and `stay`, `shoot`, `pass`).
+    #[arg(long, requires = "approach_action")]
+    approach_only: bool,
     /// PPO team preset: start from these weights (a run directory's
     /// final.safetensors, or a .safetensors checkpoint) with a fresh
     /// optimiser; the networks must have the run's shape, except that a
-    /// team trained without `pass` or `support` gains them (with
-    /// --pass-action and --support-action): `pass` starts as a copy of
-    /// `shoot`, `support` as `forward` made about 2.7 times less likely
-    /// (see --pass-init and --support-init-bias).
+    /// team trained without `pass`, `support` or `approach` gains them
+    /// (with --pass-action, --support-action and --approach-action): `pass`
+    /// starts as a copy of `shoot`, `support` as `forward` made about 2.7
+    /// times less likely (see --pass-init and --support-init-bias),
+    /// `approach` as an exact copy of `forward`.
     #[arg(long, value_name = "DIR|FILE", conflicts_with = "resume")]
     init_from: Option<PathBuf>,
     /// With --init-from and --pass-action, from a team trained without
@@ -318,6 +343,14 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
             d.chasers = n;
         }
         d.support_only = a.support_only;
+        if let Some(spot) = a.support_spot.as_deref() {
+            d.support_spot = match spot {
+                "facing" => naosoccer_policy::SupportSpot::Facing,
+                _ => naosoccer_policy::SupportSpot::Ahead,
+            };
+        }
+        d.approach = a.approach_action;
+        d.approach_only = a.approach_only;
     } else {
         anyhow::ensure!(
             a.persist.is_none() && !a.no_shoot_mask && !a.pass_action && !a.support_action,
@@ -494,6 +527,7 @@ pub fn bench_learn(a: BenchLearnArgs) -> anyhow::Result<()> {
             teammates: PolicyKind::Idle,
             threads: a.threads,
             seed: 1,
+            support_spot: Default::default(),
         },
         Opponent::Builtin(PolicyKind::Scripted),
     )?;

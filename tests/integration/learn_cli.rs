@@ -273,10 +273,13 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
 }
 
 /// `train --pass-action --support-action --support-hold 40 --support-roles 2
-/// --support-only --init-from --pass-init turn_left --support-init-bias 0`: a shipped team
-/// seeds a run with `pass`, a held `support` and roles; the run records
-/// all four and where `pass` and `support` started, and plays over the
-/// socket-free eval path; `--support-action` alone is refused, as are
+/// --support-only --support-spot facing --approach-action --approach-only
+/// --init-from --pass-init turn_left --support-init-bias 0`: a shipped team
+/// seeds a run with `pass`, a held `support`, roles and `approach`; the run
+/// records them all and where `pass` and `support` started, and plays over
+/// the socket-free eval path; `--support-action` alone is refused, as are
+/// `--approach-action`, `--approach-only` (without `--approach-action`),
+/// `--support-spot` and an unknown spot,
 /// `--support-hold`, `--support-roles` and `--support-init-bias` without
 /// it, the support action without the team preset, and `--pass-init`
 /// without `--init-from`.
@@ -296,6 +299,10 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         "--support-roles",
         "2",
         "--support-only",
+        "--support-spot",
+        "facing",
+        "--approach-action",
+        "--approach-only",
         "--init-from",
         &shipped,
         "--pass-init",
@@ -318,6 +325,9 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     assert_eq!(config["ppo"]["decision"]["support_hold"], 40);
     assert_eq!(config["ppo"]["decision"]["chasers"], 2);
     assert_eq!(config["ppo"]["decision"]["support_only"], true);
+    assert_eq!(config["ppo"]["decision"]["support_spot"], "facing");
+    assert_eq!(config["ppo"]["decision"]["approach"], true);
+    assert_eq!(config["ppo"]["decision"]["approach_only"], true);
     assert_eq!(config["init_pass_from"], "turn_left");
     assert_eq!(config["init_support_bias"], 0.0);
     let out = naosoccer(&[
@@ -380,6 +390,31 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         &["--pass-action", "--pass-init", "turn_left"],
         "--init-from",
         "--pass-init needs --init-from",
+    );
+    refused(
+        &["--pass-action", "--approach-action"],
+        "--support-action",
+        "--approach-action needs --support-action",
+    );
+    refused(
+        &["--pass-action", "--support-action", "--approach-only"],
+        "--approach-action",
+        "--approach-only needs --approach-action",
+    );
+    refused(
+        &["--pass-action", "--support-spot", "facing"],
+        "--support-action",
+        "--support-spot needs --support-action",
+    );
+    refused(
+        &[
+            "--pass-action",
+            "--support-action",
+            "--support-spot",
+            "behind",
+        ],
+        "facing",
+        "--support-spot takes ahead or facing",
     );
     let mut a = base.to_vec();
     a[4] = "cleanrl";

@@ -52,6 +52,7 @@ fn main() {
             teammates: PolicyKind::Idle,
             threads: 2,
             seed,
+            support_spot: Default::default(),
         },
         Opponent::Builtin(opponent),
     )

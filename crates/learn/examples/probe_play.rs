@@ -26,7 +26,7 @@ use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEA
 use naosoccer_referee::rules::segment_distance;
 use naosoccer_referee::{Match, MatchConfig};
 
-const NAMES: [&str; 7] = [
+const NAMES: [&str; 8] = [
     "forward",
     "turn_left",
     "turn_right",
@@ -34,6 +34,7 @@ const NAMES: [&str; 7] = [
     "stay",
     "pass",
     "support",
+    "approach",
 ];
 /// The team probed: a trained one, or a built-in one robot by robot.
 enum Blue {

@@ -171,6 +171,9 @@ impl DqnConfig {
                 support_hold: 0,
                 chasers: 0,
                 support_only: false,
+                support_spot: Default::default(),
+                approach: false,
+                approach_only: false,
             }),
         }
     }

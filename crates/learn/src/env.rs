@@ -17,8 +17,8 @@ use naosoccer_referee::{Match, MatchConfig};
 
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
-use naosoccer_policy::to_action;
 pub use naosoccer_policy::BatchActor;
+use naosoccer_policy::{to_action, SupportSpot};
 
 /// Who plays against the learner.
 pub enum Opponent {
@@ -61,6 +61,8 @@ pub struct EnvConfig {
     /// Threads that step matches.
     pub threads: usize,
     pub seed: u64,
+    /// Where a network's `support` walks to (the run's decision setting).
+    pub support_spot: SupportSpot,
 }
 
 struct Slot {
@@ -693,12 +695,13 @@ impl Slot {
         // spot, as in play (`LearnedPolicy::action`).
         let field = self.m.field();
         let half = [field.half_length, field.half_width];
+        let spot = env.support_spot;
         for (k, &p) in env.learners.iter().enumerate() {
-            joint[own + p] = to_action(actions[k], &self.obs[own + p], half);
+            joint[own + p] = to_action(actions[k], &self.obs[own + p], half, spot);
         }
         if let Some(opp) = opp {
             for p in 0..PLAYERS_PER_TEAM {
-                joint[other + p] = to_action(opp[p], &self.obs[other + p], half);
+                joint[other + p] = to_action(opp[p], &self.obs[other + p], half, spot);
             }
         }
         for (i, policy) in self.policies.iter_mut().enumerate() {

@@ -186,6 +186,9 @@ impl PpoConfig {
                 support_hold: 0,
                 chasers: 0,
                 support_only: false,
+                support_spot: Default::default(),
+                approach: false,
+                approach_only: false,
             }),
         }
     }

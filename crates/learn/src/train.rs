@@ -311,6 +311,27 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
                 .into(),
         ));
     }
+    if decisions
+        .iter()
+        .flatten()
+        .any(|d| (d.approach || d.support_spot != Default::default()) && !d.support)
+    {
+        return Err(LearnError::Config(
+            "--approach-action and --support-spot come with the support action: they need \
+             --support-action"
+                .into(),
+        ));
+    }
+    if decisions
+        .iter()
+        .flatten()
+        .any(|d| d.approach_only && !d.approach)
+    {
+        return Err(LearnError::Config(
+            "--approach-only leaves the robots `approach` to move: it needs --approach-action"
+                .into(),
+        ));
+    }
     if decisions.iter().flatten().any(|d| d.chasers >= 4) {
         return Err(LearnError::Config(
             "--support-roles names how many of the four robots chase: 1 to 3".into(),
@@ -360,6 +381,10 @@ fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             teammates,
             threads: cfg.threads,
             seed: cfg.seed,
+            support_spot: cfg
+                .ppo
+                .decision
+                .map_or_else(Default::default, |d| d.support_spot),
         },
         opponent_for(cfg)?,
     )?;
@@ -808,7 +833,9 @@ fn train_ppo_decisions(
 /// `pass` action may start from one without it: its extra output row (the
 /// last layer's weights and bias) starts as a copy of `pass_from`'s (with
 /// `shoot`, `pass` is at first as likely as `shoot` where both are
-/// possible). `pass_from` must be one of the paper's five actions.
+/// possible). `pass_from` must be one of the paper's five actions. A gained
+/// `support` row starts as `forward`'s with its bias `support_bias` lower,
+/// a gained `approach` row as an exact copy of `forward`'s.
 pub fn init_weights(
     ppo: &mut Ppo,
     path: &Path,
@@ -816,7 +843,7 @@ pub fn init_weights(
     support_bias: f32,
 ) -> Result<(), LearnError> {
     use crate::ppo::PASS;
-    use naosoccer_policy::SUPPORT;
+    use naosoccer_policy::{APPROACH, SUPPORT};
     let file = if path.is_dir() {
         path.join("final.safetensors")
     } else {
@@ -845,31 +872,36 @@ pub fn init_weights(
         let (want, got) = (var.size(), src.size());
         tch::no_grad(|| -> Result<(), LearnError> {
             // The actor's output layer may gain rows: `pass` (a copy of
-            // `pass_from`, by default `shoot`) and `support` (a copy of
+            // `pass_from`, by default `shoot`), `support` (a copy of
             // `forward`, its bias lowered by `support_bias`, by default
-            // SUPPORT_INIT_BIAS so that it starts rarer than `forward`).
+            // SUPPORT_INIT_BIAS so that it starts rarer than `forward`) and
+            // `approach` (an exact copy of `forward`).
+            let (pass, support, approach) = (PASS as i64, SUPPORT as i64, APPROACH as i64);
             let widen = name.starts_with("actor.")
                 && !want.is_empty()
                 && want[1..] == got[1..]
-                && (got[0] == PASS as i64 || got[0] == SUPPORT as i64)
-                && (want[0] == PASS as i64 + 1 || want[0] == SUPPORT as i64 + 1)
+                && (pass..=approach).contains(&got[0])
+                && (pass + 1..=approach + 1).contains(&want[0])
                 && want[0] > got[0];
             if want == got {
                 var.copy_(src);
             } else if widen {
                 var.narrow(0, 0, got[0]).copy_(src);
-                if got[0] == PASS as i64 {
-                    var.narrow(0, PASS as i64, 1)
+                let forward = src.narrow(0, naosoccer_policy::actions::FORWARD as i64, 1);
+                if got[0] <= pass {
+                    var.narrow(0, pass, 1)
                         .copy_(&src.narrow(0, pass_row as i64, 1));
                 }
-                if want[0] == SUPPORT as i64 + 1 {
-                    let forward = src.narrow(0, naosoccer_policy::actions::FORWARD as i64, 1);
+                if got[0] <= support && want[0] > support {
                     let row = if want.len() == 1 {
-                        forward - f64::from(support_bias)
+                        &forward - f64::from(support_bias)
                     } else {
                         forward.shallow_clone()
                     };
-                    var.narrow(0, SUPPORT as i64, 1).copy_(&row);
+                    var.narrow(0, support, 1).copy_(&row);
+                }
+                if want[0] > approach {
+                    var.narrow(0, approach, 1).copy_(&forward);
                 }
             } else {
                 return Err(bad(format!(

@@ -62,6 +62,7 @@ fn mean_return(cfg: &TrainConfig, seed: u64, mut decide: impl FnMut(&[f32], &mut
             teammates: PolicyKind::Idle,
             threads: 2,
             seed,
+            support_spot: Default::default(),
         },
         Opponent::Builtin(PolicyKind::Idle),
     )
@@ -467,6 +468,9 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
         support_hold: 0,
         chasers: 0,
         support_only: false,
+        support_spot: Default::default(),
+        approach: false,
+        approach_only: false,
     };
     let half = [4.5, 3.0];
     let mut h = Hold::default();
@@ -517,7 +521,7 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
         o.ball.y = ball.1;
         o
     };
-    let spot = support_spot(&at(0, -2.0, (0.0, 0.0)), half);
+    let spot = support_spot(&at(0, -2.0, (0.0, 0.0)), half, Default::default());
     assert_eq!(spot, [1.5, 1.0]);
     let mut d = DecisionConfig {
         persist: 3,
@@ -527,6 +531,9 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
         support_hold: 30,
         chasers: 0,
         support_only: false,
+        support_spot: Default::default(),
+        approach: false,
+        approach_only: false,
     };
     let mut h = Hold::default();
     assert!(h.must_decide(&at(0, -2.0, (0.0, 0.0))));
@@ -760,6 +767,7 @@ fn drill_success(cfg: &TrainConfig, spec: &str, seed: u64, episodes: usize) -> f
             teammates: PolicyKind::Idle,
             threads: 1,
             seed,
+            support_spot: Default::default(),
         },
         Opponent::Builtin(PolicyKind::Idle),
     )
@@ -1080,6 +1088,7 @@ fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
             teammates: PolicyKind::Idle,
             threads: 2,
             seed: 3,
+            support_spot: Default::default(),
         },
         Opponent::Builtin(PolicyKind::Scripted),
     )
@@ -1334,4 +1343,92 @@ fn init_from_widens_the_actor_for_the_support_action() {
             assert!(err.contains("needs [5"), "{err}");
         }
     }
+}
+
+/// `--init-from` with `approach`: a five-, six- or seven-action team seeds
+/// an eight-action actor. The old logits carry over, a gained `support`
+/// starts as usual, and `approach` starts exactly as `forward`, so that
+/// with `--approach-only` (no `forward`) it takes `forward`'s place.
+#[test]
+fn init_from_widens_the_actor_for_the_approach_action() {
+    use naosoccer_learn::ppo::{Ppo, PpoConfig, Preset};
+    use naosoccer_learn::train::init_weights;
+    use naosoccer_policy::{APPROACH, SUPPORT};
+    let _g = torch_lock();
+    let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
+    let five = PpoConfig::preset(Preset::Team);
+    let mut six = five.clone();
+    six.decision.as_mut().unwrap().pass = true;
+    let mut seven = six.clone();
+    seven.decision.as_mut().unwrap().support = true;
+    let mut eight = seven.clone();
+    eight.decision.as_mut().unwrap().approach = true;
+    assert_eq!(eight.actions(), 8);
+    let dir = out_dir("init_from_approach");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let n = 5;
+    let rows: Vec<f32> = (0..n * OBS_DIM)
+        .map(|_| rng.random_range(-1.0..1.0))
+        .collect();
+    let logits = |p: &Ppo| actor_logits(p, &rows, n);
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-5;
+    for (from, k) in [(five, 5usize), (six, 6), (seven, 7)] {
+        let src = Ppo::new(from, &scale, 4).unwrap();
+        let file = dir.join(format!("from{k}.safetensors"));
+        naosoccer_learn::policy::save_stores(&[&src.net.vs], &file).unwrap();
+        let before = logits(&src);
+        let mut dst = Ppo::new(eight.clone(), &scale, 4).unwrap();
+        init_weights(&mut dst, &file, Action::TurnLeft, 0.5).unwrap();
+        let after = logits(&dst);
+        for i in 0..n {
+            for a in 0..k {
+                assert!(
+                    close(after[i * 8 + a], before[i * k + a]),
+                    "{k}: row {i}, action {a}"
+                );
+            }
+            let forward = before[i * k];
+            assert!(close(after[i * 8 + APPROACH], forward), "{k}: row {i}");
+            if k < 7 {
+                assert!(close(after[i * 8 + SUPPORT], forward - 0.5), "{k}: row {i}");
+            }
+        }
+    }
+}
+
+/// The trainer itself (not only the CLI) refuses decision settings that
+/// lack what they build on: `approach` or a support spot without
+/// `support`, `approach_only` without `approach`, roles without `support`.
+#[test]
+fn decision_settings_without_their_prerequisites_are_refused() {
+    use naosoccer_learn::ppo::{PpoConfig, Preset};
+    use naosoccer_policy::SupportSpot;
+    let _torch = torch_lock();
+    let dir = out_dir("decision_refused");
+    let team = || {
+        let mut cfg = tiny_config(Algo::Ppo, 1);
+        cfg.ppo = PpoConfig::preset(Preset::Team);
+        cfg.ppo.decision.as_mut().unwrap().pass = true;
+        cfg
+    };
+    let refused = |edit: &dyn Fn(&mut naosoccer_policy::DecisionConfig), needle: &str| {
+        let mut cfg = team();
+        edit(cfg.ppo.decision.as_mut().unwrap());
+        let err = train(&cfg, &dir, &mut |_| {}).unwrap_err().to_string();
+        assert!(err.contains(needle), "{err}");
+    };
+    refused(&|d| d.approach = true, "--support-action");
+    refused(
+        &|d| d.support_spot = SupportSpot::Facing,
+        "--support-action",
+    );
+    refused(&|d| d.chasers = 2, "--support-action");
+    refused(
+        &|d| {
+            d.support = true;
+            d.approach_only = true;
+        },
+        "--approach-action",
+    );
 }

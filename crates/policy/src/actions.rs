@@ -9,12 +9,15 @@ use serde::{Deserialize, Serialize};
 
 /// The paper's discrete actions, in `proto::Action::from_index` order:
 /// forward, turn left, turn right, shoot, stay. A team trained with
-/// [`DecisionConfig::pass`] has a sixth, `pass` ([`PASS`]), and one trained
-/// with [`DecisionConfig::support`] a seventh, `support` ([`SUPPORT`]).
+/// [`DecisionConfig::pass`] has a sixth, `pass` ([`PASS`]), one trained
+/// with [`DecisionConfig::support`] a seventh, `support` ([`SUPPORT`]), and
+/// one trained with [`DecisionConfig::approach`] an eighth, `approach`
+/// ([`APPROACH`]).
 pub const ACTIONS: usize = 5;
 
-/// The most actions a network has (the paper's five, `pass` and `support`).
-pub const MAX_ACTIONS: usize = 7;
+/// The most actions a network has (the paper's five, `pass`, `support`
+/// and `approach`).
+pub const MAX_ACTIONS: usize = 8;
 
 /// Index of `pass`, the sixth action of teams trained with it.
 pub const PASS: usize = 5;
@@ -24,6 +27,13 @@ pub const PASS: usize = 5;
 /// `forward`, turn or `stay` that walks the robot to its support spot
 /// ([`support_action`]).
 pub const SUPPORT: usize = 6;
+
+/// Index of `approach`, the eighth action of teams trained with it. Like
+/// `support` it is not a protocol action: the team's policy turns it, every
+/// tick, into the `forward` or turn that walks the robot round behind the
+/// ball, onto the line from the ball to the opponent goal, and then into
+/// the ball facing that way ([`approach_action`]).
+pub const APPROACH: usize = 7;
 
 /// Index of `forward`.
 pub const FORWARD: usize = 0;
@@ -48,6 +58,22 @@ pub const SUPPORT_FACE_CONE: f32 = 0.5;
 /// the ball is this close to the robot (m), so a robot that a pass reaches
 /// decides at once.
 pub const SUPPORT_RELEASE_BALL: f32 = 0.6;
+
+/// `approach` walks straight into the ball once the robot stands within
+/// this angle (rad) of the line from the ball to the opponent goal, seen
+/// from the ball (within twice it when closer than [`APPROACH_NEAR`]); the
+/// scripted team's `align_tolerance`.
+pub const APPROACH_ALIGN: f32 = 0.5;
+/// See [`APPROACH_ALIGN`] (m).
+pub const APPROACH_NEAR: f32 = 0.25;
+/// Out of line, `approach` first walks to this far behind the ball on that
+/// line (m): the scripted team's `behind`.
+pub const APPROACH_BEHIND: f32 = 0.3;
+/// Walking into the ball, `approach` turns while the ball would pass more
+/// than this far (m) to the side of the robot's heading line...
+pub const APPROACH_LATERAL: f32 = 0.06;
+/// ...but never for an angle error below this (rad).
+pub const APPROACH_MIN_CONE: f32 = 0.12;
 
 /// Index of `turn_left`.
 pub const TURN_LEFT: usize = 1;
@@ -107,38 +133,142 @@ pub struct DecisionConfig {
     /// configurations: `false`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub support_only: bool,
+    /// With `support`: where the support spot is ([`SupportSpot`]). Absent
+    /// from older runs' configurations: [`SupportSpot::Ahead`].
+    #[serde(default, skip_serializing_if = "SupportSpot::is_ahead")]
+    pub support_spot: SupportSpot,
+    /// The robots have an eighth action, `approach` (needs `support`): walk
+    /// round behind the ball onto its line to the opponent goal, then into
+    /// it ([`approach_action`]). Under `chasers`, the robots that do not
+    /// chase may not `approach` either. Absent from older runs'
+    /// configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub approach: bool,
+    /// With `approach`: no robot may `forward` or turn; the robots move by
+    /// `approach` and `support` only ([`APPROACH_ONLY_BANNED`]). Absent
+    /// from older runs' configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub approach_only: bool,
 }
 
 fn is_zero(v: &u32) -> bool {
     *v == 0
 }
 
+/// Where a `support` walks to ([`support_spot`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SupportSpot {
+    /// [`SUPPORT_AHEAD`] ahead of the ball toward the opponent goal and
+    /// [`SUPPORT_SIDE`] to the side the robot is on.
+    #[default]
+    Ahead,
+    /// [`SUPPORT_AHEAD`] beyond the ball on the line from the teammate
+    /// nearest the ball (the one about to kick it) through the ball, and
+    /// [`SUPPORT_SIDE`] to the side of that line the robot is on: where the
+    /// kicker faces when it reaches the ball, whichever way that is.
+    Facing,
+}
+
+impl SupportSpot {
+    fn is_ahead(&self) -> bool {
+        *self == SupportSpot::Ahead
+    }
+}
+
 impl DecisionConfig {
     /// How many actions the networks choose among: 5, 6 with `pass`, 7
-    /// with `pass` and `support`.
+    /// with `pass` and `support`, 8 with `approach` too.
     pub fn actions(&self) -> usize {
-        match (self.pass, self.support) {
-            (_, true) => SUPPORT + 1,
-            (true, false) => PASS + 1,
-            (false, false) => ACTIONS,
+        match (self.pass, self.support, self.approach) {
+            (_, true, true) => APPROACH + 1,
+            (_, true, false) => SUPPORT + 1,
+            (true, false, _) => PASS + 1,
+            (false, false, _) => ACTIONS,
         }
     }
 }
 
 /// The protocol action a team's action index `index` stands for in the
-/// state `obs`: the index itself for the protocol's actions, the step
-/// toward the support spot for [`SUPPORT`] (on a pitch of half length and
-/// half width `half`), `stay` for anything else.
-pub fn to_action(index: usize, obs: &Observation, half: [f32; 2]) -> Action {
-    if index == SUPPORT {
-        support_action(obs, half)
+/// state `obs`, on a pitch of half length and half width `half`: the index
+/// itself for the protocol's actions, the step toward the support spot
+/// (placed as `spot` says) for [`SUPPORT`], the step of [`approach_action`]
+/// for [`APPROACH`], `stay` for anything else.
+pub fn to_action(index: usize, obs: &Observation, half: [f32; 2], spot: SupportSpot) -> Action {
+    match index {
+        SUPPORT => support_action(obs, half, spot),
+        APPROACH => approach_action(obs, half),
+        _ => Action::from_index(index).unwrap_or(Action::Stay),
+    }
+}
+
+/// The `approach` action's step for the robot that received `obs`, on a
+/// pitch of half length and half width `half` (m), as the scripted team
+/// lines up: seen from the ball, when the robot stands within
+/// [`APPROACH_ALIGN`] of the line from the ball to the opponent goal's
+/// centre, it turns to the ball (while the ball would pass more than
+/// [`APPROACH_LATERAL`] to the side, or [`APPROACH_MIN_CONE`]) and walks
+/// into it, so it reaches the ball facing the goal and walks on with it.
+/// Otherwise it walks round to [`APPROACH_BEHIND`] behind the ball on that
+/// line, going wide of the ball when the ball is in the way. Stateless, so
+/// it is the same step in training, in process and over the socket.
+pub fn approach_action(obs: &Observation, half: [f32; 2]) -> Action {
+    let me = obs.me();
+    if me.fallen {
+        return Action::Stay;
+    }
+    let ball = [obs.ball.x, obs.ball.y];
+    let to_goal = [half[0] - ball[0], -ball[1]];
+    let len = to_goal[0].hypot(to_goal[1]);
+    let u = if len > 1e-6 {
+        [to_goal[0] / len, to_goal[1] / len]
     } else {
-        Action::from_index(index).unwrap_or(Action::Stay)
+        [1.0, 0.0]
+    };
+    let to_ball = [ball[0] - me.x, ball[1] - me.y];
+    let d = to_ball[0].hypot(to_ball[1]);
+    let ball_dir = to_ball[1].atan2(to_ball[0]);
+    let off = wrap_angle(ball_dir - u[1].atan2(u[0])).abs();
+    let (target, cone) =
+        if off < APPROACH_ALIGN || (d < APPROACH_NEAR && off < 2.0 * APPROACH_ALIGN) {
+            let cone = (APPROACH_LATERAL / d.max(1e-3))
+                .atan()
+                .clamp(APPROACH_MIN_CONE, SUPPORT_WALK_CONE);
+            (ball, cone)
+        } else {
+            let rel = [me.x - ball[0], me.y - ball[1]];
+            let along = rel[0] * u[0] + rel[1] * u[1];
+            let across = u[0] * rel[1] - u[1] * rel[0];
+            let target = if along > -0.15 && across.abs() < 0.45 {
+                // The ball is in the way: go wide of it first.
+                let side = if across >= 0.0 { 1.0 } else { -1.0 };
+                [
+                    ball[0] - u[1] * side * 0.5 - u[0] * 0.15,
+                    ball[1] + u[0] * side * 0.5 - u[1] * 0.15,
+                ]
+            } else {
+                [
+                    ball[0] - u[0] * APPROACH_BEHIND,
+                    ball[1] - u[1] * APPROACH_BEHIND,
+                ]
+            };
+            (target, SUPPORT_WALK_CONE)
+        };
+    let err = wrap_angle((target[1] - me.y).atan2(target[0] - me.x) - me.heading);
+    if err.abs() > cone {
+        if err > 0.0 {
+            Action::TurnLeft
+        } else {
+            Action::TurnRight
+        }
+    } else {
+        Action::Forward
     }
 }
 
 /// The `support` action's step for the robot that received `obs`, on a
-/// pitch of half length and half width `half` (m): its support spot is
+/// pitch of half length and half width `half` (m): its support spot
+/// ([`support_spot`], placed as `spot` says) is by default
 /// [`SUPPORT_AHEAD`] ahead of the ball (toward the opponent goal, +x in the
 /// observation's frame) and [`SUPPORT_SIDE`] to the side of the ball the
 /// robot stands on, kept 0.3 m inside the lines (the reward's `support`
@@ -146,13 +276,13 @@ pub fn to_action(index: usize, obs: &Observation, half: [f32; 2]) -> Action {
 /// [`SUPPORT_WALK_CONE`] and walks; arrived, it turns to face the ball.
 /// Stateless, so it is the same step in training, in process and over the
 /// socket.
-pub fn support_action(obs: &Observation, half: [f32; 2]) -> Action {
+pub fn support_action(obs: &Observation, half: [f32; 2], spot: SupportSpot) -> Action {
     let me = obs.me();
     if me.fallen {
         return Action::Stay;
     }
     let (bx, by) = (obs.ball.x, obs.ball.y);
-    let spot = support_spot(obs, half);
+    let spot = support_spot(obs, half, spot);
     let (dx, dy) = (spot[0] - me.x, spot[1] - me.y);
     let (target, cone, arrived) = if dx.hypot(dy) > SUPPORT_ARRIVE {
         ([dx, dy], SUPPORT_WALK_CONE, false)
@@ -174,17 +304,47 @@ pub fn support_action(obs: &Observation, half: [f32; 2]) -> Action {
 }
 
 /// The support spot of the robot that received `obs` (observation frame,
-/// m): [`SUPPORT_AHEAD`] ahead of the ball and [`SUPPORT_SIDE`] to the side
-/// of it the robot stands on, kept 0.3 m inside the lines of a pitch of
-/// half length and half width `half`.
-pub fn support_spot(obs: &Observation, half: [f32; 2]) -> [f32; 2] {
+/// m), kept 0.3 m inside the lines of a pitch of half length and half
+/// width `half`. [`SupportSpot::Ahead`]: [`SUPPORT_AHEAD`] ahead of the
+/// ball (+x) and [`SUPPORT_SIDE`] to the side of it the robot stands on.
+/// [`SupportSpot::Facing`]: [`SUPPORT_AHEAD`] beyond the ball on the line
+/// from the standing teammate nearest the ball (on a tie the lower player
+/// number; not the robot itself) through the ball, and [`SUPPORT_SIDE`] to
+/// the side of that line the robot stands on; with no such teammate, or
+/// one on the ball's centre, as `Ahead`.
+pub fn support_spot(obs: &Observation, half: [f32; 2], spot: SupportSpot) -> [f32; 2] {
     let me = obs.me();
     let (bx, by) = (obs.ball.x, obs.ball.y);
-    let side = if me.y >= by { 1.0 } else { -1.0 };
     let (lx, ly) = ((half[0] - 0.3).max(0.0), (half[1] - 0.3).max(0.0));
+    let mut dir = [1.0, 0.0];
+    if spot == SupportSpot::Facing {
+        let mine = obs.player.index();
+        let d = |r: &naosoccer_proto::RobotObs| (r.x - bx).hypot(r.y - by);
+        let kicker = obs
+            .own
+            .iter()
+            .enumerate()
+            .filter(|&(j, r)| j != mine && !r.fallen)
+            .fold(None, |best: Option<(f32, usize)>, (j, r)| match best {
+                Some(b) if b.0 <= d(r) => Some(b),
+                _ => Some((d(r), j)),
+            });
+        if let Some((len, j)) = kicker {
+            if len > 1e-3 {
+                let k = &obs.own[j];
+                dir = [(bx - k.x) / len, (by - k.y) / len];
+            }
+        }
+    }
+    // Left of the line (looking along `dir`) is +1.
+    let side = if dir[0] * (me.y - by) - dir[1] * (me.x - bx) >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    };
     [
-        (bx + SUPPORT_AHEAD).clamp(-lx, lx),
-        (by + side * SUPPORT_SIDE).clamp(-ly, ly),
+        (bx + dir[0] * SUPPORT_AHEAD - dir[1] * side * SUPPORT_SIDE).clamp(-lx, lx),
+        (by + dir[1] * SUPPORT_AHEAD + dir[0] * side * SUPPORT_SIDE).clamp(-ly, ly),
     ]
 }
 
@@ -222,23 +382,31 @@ pub fn is_chaser(obs: &Observation, chasers: u32) -> bool {
 
 /// The actions a robot that is not one of its team's chasers may not choose
 /// under [`DecisionConfig::chasers`], as bits (`1 << index`): `forward` and
-/// the turns.
+/// the turns (and `approach`, for a team that has it).
 pub const ROLE_BANNED: u8 = 1 << FORWARD | 1 << TURN_LEFT | 1 << TURN_RIGHT;
 
 /// What a robot that does not chase may not choose under
 /// [`DecisionConfig::support_only`]: [`ROLE_BANNED`] and `stay`.
 pub const SUPPORT_ONLY_BANNED: u8 = ROLE_BANNED | 1 << STAY;
 
+/// What no robot may choose under [`DecisionConfig::approach_only`]:
+/// `forward` and the turns.
+pub const APPROACH_ONLY_BANNED: u8 = 1 << FORWARD | 1 << TURN_LEFT | 1 << TURN_RIGHT;
+
 /// The actions, beyond a `shoot` out of reach, that the robot that received
 /// `obs` may not choose now under `decision`, as bits (`1 << index`):
 /// `pass` without a receiver or out of reach (`in_reach`, from the
-/// encoder), and [`ROLE_BANNED`] for a robot that is not a chaser under
-/// [`DecisionConfig::chasers`] ([`SUPPORT_ONLY_BANNED`] with
-/// [`DecisionConfig::support_only`]).
+/// encoder); [`ROLE_BANNED`] (and `approach`) for a robot that is not a
+/// chaser under [`DecisionConfig::chasers`] ([`SUPPORT_ONLY_BANNED`] with
+/// [`DecisionConfig::support_only`]); [`APPROACH_ONLY_BANNED`] for every
+/// robot under [`DecisionConfig::approach_only`].
 pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> u8 {
     let mut banned = 0;
     if decision.pass && !pass_possible(obs, in_reach) {
         banned |= 1 << PASS;
+    }
+    if decision.approach_only {
+        banned |= APPROACH_ONLY_BANNED;
     }
     if decision.chasers > 0 && !is_chaser(obs, decision.chasers) {
         banned |= if decision.support_only {
@@ -246,6 +414,9 @@ pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConf
         } else {
             ROLE_BANNED
         };
+        if decision.approach {
+            banned |= 1 << APPROACH;
+        }
     }
     banned
 }
@@ -337,8 +508,9 @@ pub struct Hold {
     /// A `support` held to its spot ([`DecisionConfig::support_hold`]):
     /// from this tick on it also ends on arrival or with the ball near.
     release_from: Option<Tick>,
-    /// The pitch's half length and half width (m), for the support spot.
+    /// The pitch's half length and half width (m), and where the spot is.
     half: [f32; 2],
+    spot: SupportSpot,
 }
 
 impl Hold {
@@ -361,7 +533,7 @@ impl Hold {
         match self.release_from {
             Some(from) if obs.tick >= from => {
                 let me = obs.me();
-                let spot = support_spot(obs, self.half);
+                let spot = support_spot(obs, self.half, self.spot);
                 let arrived = (spot[0] - me.x).hypot(spot[1] - me.y) <= SUPPORT_ARRIVE;
                 let ball_near =
                     (obs.ball.x - me.x).hypot(obs.ball.y - me.y) <= SUPPORT_RELEASE_BALL;
@@ -395,6 +567,7 @@ impl Hold {
         } else if action == SUPPORT && u64::from(decision.support_hold) > persist {
             self.release_from = Some(tick + persist);
             self.half = half;
+            self.spot = decision.support_spot;
             u64::from(decision.support_hold)
         } else {
             persist

@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 use crate::actions::MASKED_LOGIT;
 use crate::actions::{
     action_count, argmax, banned_actions, mask_row, row_bans, sample, sample_uniform, to_action,
-    DecisionConfig, Hold, ACTIONS, SHOOT,
+    DecisionConfig, Hold, SupportSpot, ACTIONS, SHOOT,
 };
 use crate::mlp::{Activation, Mlp, Weights};
 use crate::obs::{layout_dim, ObsScale, OBS_DIM, OBS_VERSION_LATEST};
@@ -657,7 +657,7 @@ impl LearnedPolicy {
     }
 
     /// How many actions the team chooses among: 5, 6 with `pass`, 7 with
-    /// `support` too.
+    /// `support` too, 8 with `approach`.
     pub fn actions(&self) -> usize {
         self.actions
     }
@@ -665,9 +665,16 @@ impl LearnedPolicy {
     /// The protocol action that action index `index` (from
     /// [`LearnedPolicy::act_matches`]) stands for in the state `obs`: a
     /// `support` becomes the step toward the robot's support spot
-    /// ([`crate::support_action`]).
+    /// ([`crate::support_action`]), an `approach` the step of
+    /// [`crate::approach_action`].
     pub fn action(&self, index: usize, obs: &Observation) -> Action {
-        to_action(index, obs, [self.scale.half_length, self.scale.half_width])
+        to_action(
+            index,
+            obs,
+            [self.scale.half_length, self.scale.half_width],
+            self.decision
+                .map_or_else(SupportSpot::default, |d| d.support_spot),
+        )
     }
 
     pub fn scale(&self) -> ObsScale {

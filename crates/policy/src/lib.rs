@@ -24,7 +24,8 @@ pub mod obs;
 use naosoccer_proto::Observation;
 
 pub use actions::{
-    support_action, to_action, DecisionConfig, ACTIONS, MAX_ACTIONS, PASS, SHOOT, STAY, SUPPORT,
+    approach_action, support_action, to_action, DecisionConfig, SupportSpot, ACTIONS, APPROACH,
+    MAX_ACTIONS, PASS, SHOOT, STAY, SUPPORT,
 };
 pub use error::PolicyError;
 pub use learned::{
