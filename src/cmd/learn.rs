@@ -38,7 +38,14 @@ fn parse_players(s: &str) -> Result<Vec<usize>, String> {
   naosoccer train --algo ppo --preset team --config assets/train-team-lane.toml --obs-version 3 \
                   --minutes 10 --steps 40000000 --seed 1 --threads 1 --checkpoint-every 1000000 \
                   --opponent \"schedule:idle@1000000,random@3000000,scripted@8000000,scripted+scripted:assets/scripted/hound.toml+pool=2\" \
-                  --out runs/ppo-team-1      # the shipped ppo-team-seed1 (docs/LEARNING.md)
+                  --out runs/ppo-team-1      # ppo-team-v3-seed1 (docs/LEARNING.md)
+  naosoccer train --algo ppo --preset team --config assets/train-team-facing.toml --obs-version 3 \
+                  --minutes 10 --steps 10000000 --seed 1 --threads 1 --checkpoint-every 1000000 \
+                  --opponent \"schedule:scripted+scripted:assets/scripted/hound.toml+pool=2\" \
+                  --pass-drills 4 --pass-action --support-action --support-hold 60 --support-roles 2 \
+                  --support-spot facing --init-from runs/ppo-team-1 --pass-init turn_left \
+                  --support-init-bias 0 --lr 0.0001 --entropy-coef 0.006 \
+                  --out runs/ppo-team-1-facing   # then this: the shipped ppo-team-seed1
   naosoccer train --resume runs/ppo-team-1   # go on after a stop, bit for bit
 
 Presets (--preset, PPO): paper (the paper's Algorithm 2, every robot decides

@@ -288,7 +288,7 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
 fn support_action_runs_start_from_a_shipped_team_and_play() {
     let run = dir("cli_support_action");
     let run_s = run.to_str().unwrap();
-    let shipped = shipped_policy("ppo-team-seed2");
+    let shipped = shipped_policy("ppo-team-v3-seed2");
     let base = short_train("ppo", "team", "6");
     let mut a = base.to_vec();
     a.extend([
@@ -439,7 +439,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
 fn pass_action_runs_start_from_a_shipped_team_and_play() {
     let run = dir("cli_pass_action");
     let run_s = run.to_str().unwrap();
-    let shipped = shipped_policy("ppo-team-seed1");
+    let shipped = shipped_policy("ppo-team-v3-seed1");
     let args = |algo: &'static str, preset: &'static str| {
         let mut a = short_train(algo, preset, "5");
         a.push("--pass-action");

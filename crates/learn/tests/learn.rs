@@ -939,7 +939,7 @@ fn recorded_observations(matches: u64) -> Vec<naosoccer_proto::Observation> {
 fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
     use naosoccer_learn::dqn::QNet;
     use naosoccer_learn::policy::sample_uniform;
-    use naosoccer_learn::ppo::{rows_tensor, shoot_mask, ActorCritic, ACTIONS};
+    use naosoccer_learn::ppo::{rows_tensor, ActorCritic, SHOOT};
     use naosoccer_policy::actions::{argmax, sample};
     use tch::{Kind, Tensor};
 
@@ -961,6 +961,8 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
                 .unwrap();
         let spec = format!("{}:{}", cfg.algo, dir.display());
         let pure = LearnedPolicy::load(&spec).unwrap();
+        // Outputs a row: 5, or 6 and 7 for teams with `pass` and `support`.
+        let k = pure.actions();
         let scale = pure.scale();
         let dim = scale.dim();
         let n = obs.len();
@@ -1002,8 +1004,8 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
                 Some(ac) => ac.logits(&x),
                 None => nets[net].q(&x),
             });
-            let mut v = vec![0.0f32; (b - a) * ACTIONS];
-            y.to_kind(Kind::Float).copy_data(&mut v, (b - a) * ACTIONS);
+            let mut v = vec![0.0f32; (b - a) * k];
+            y.to_kind(Kind::Float).copy_data(&mut v, (b - a) * k);
             v
         };
         let players = if nets.len() > 1 { nets.len() } else { 1 };
@@ -1013,7 +1015,7 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
             let want_player = cfg.learners.get(player).copied().unwrap_or(0);
             let ours = pure.outputs(&rows, want_player);
             let whole = tch_out(net, 0, n);
-            let mut teams = Vec::with_capacity(n * ACTIONS);
+            let mut teams = Vec::with_capacity(n * k);
             for a in (0..n).step_by(4) {
                 teams.extend(tch_out(net, a, (a + 4).min(n)));
             }
@@ -1023,31 +1025,36 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
                 }
                 // Greedy: the largest (allowed) output.
                 for i in 0..n {
-                    let mut a = ours[i * ACTIONS..(i + 1) * ACTIONS].to_vec();
-                    let mut b = theirs[i * ACTIONS..(i + 1) * ACTIONS].to_vec();
+                    let mut a = ours[i * k..(i + 1) * k].to_vec();
+                    let mut b = theirs[i * k..(i + 1) * k].to_vec();
                     if !shoot_ok[i] {
-                        a[3] = f32::NEG_INFINITY;
-                        b[3] = f32::NEG_INFINITY;
+                        a[SHOOT] = f32::NEG_INFINITY;
+                        b[SHOOT] = f32::NEG_INFINITY;
                     }
                     assert_eq!(argmax(&a), argmax(&b), "{spec}: greedy action of row {i}");
                 }
             }
-            // Sampled (PPO): tch's softmax of the masked logits, drawn with
-            // the same numbers as the torch-free team draws with.
+            // Sampled (PPO): tch's softmax of the logits with `shoot`
+            // masked out of reach (what `probabilities` masks from rows
+            // alone), drawn with the same numbers as the torch-free team
+            // draws with.
             if ppo.is_some() {
                 let probs = pure.probabilities(&rows);
-                let mask =
-                    Tensor::from_slice(&shoot_mask(&shoot_ok)).view([n as i64, ACTIONS as i64]);
-                let logits = Tensor::from_slice(&whole).view([n as i64, ACTIONS as i64]) + mask;
-                let mut p = vec![0.0f32; n * ACTIONS];
-                logits
-                    .softmax(-1, Kind::Float)
-                    .copy_data(&mut p, n * ACTIONS);
+                let mut mask = vec![0.0f32; n * k];
+                for (i, &ok) in shoot_ok.iter().enumerate() {
+                    if !ok {
+                        mask[i * k + SHOOT] = naosoccer_policy::actions::MASKED_LOGIT;
+                    }
+                }
+                let mask = Tensor::from_slice(&mask).view([n as i64, k as i64]);
+                let logits = Tensor::from_slice(&whole).view([n as i64, k as i64]) + mask;
+                let mut p = vec![0.0f32; n * k];
+                logits.softmax(-1, Kind::Float).copy_data(&mut p, n * k);
                 for (i, o) in obs.iter().enumerate() {
                     let u = sample_uniform(7, o.team.index(), o.player.index(), o.tick);
                     assert_eq!(
-                        sample(&probs[i * ACTIONS..(i + 1) * ACTIONS], u),
-                        sample(&p[i * ACTIONS..(i + 1) * ACTIONS], u),
+                        sample(&probs[i * k..(i + 1) * k], u),
+                        sample(&p[i * k..(i + 1) * k], u),
                         "{spec}: sampled action of row {i}"
                     );
                 }

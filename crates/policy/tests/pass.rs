@@ -29,7 +29,7 @@ fn loving_team(favourite: usize) -> LearnedPolicy {
 /// and `support`), with `chasers` as given and a bias that makes
 /// `favourite` the greedy choice wherever it is allowed.
 fn team_loving(last: usize, favourite: usize, chasers: u32) -> LearnedPolicy {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/policies/ppo-team-seed1");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/policies/ppo-team-v3-seed1");
     let mut cfg = PlayConfig::read(&dir.join("config.json")).unwrap();
     let d = cfg.ppo.decision.as_mut().unwrap();
     d.pass = true;
