@@ -5,7 +5,7 @@
 //! `bench server --viewer` watches its match with it, and the live tests
 //! use it as their viewer.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
 use anyhow::Context as _;
 use foxglove::messages::{FrameTransforms, Log, SceneUpdate};
@@ -28,7 +28,18 @@ pub struct Viewer {
     ws: WebSocketStream<TcpStream>,
     /// Each subscription's message encoding and schema name.
     subs: BTreeMap<u32, (String, String)>,
+    /// Message data that arrived while [`Viewer::subscribe`] waited for the
+    /// server's answer, handed out first by [`Viewer::next_raw`].
+    early: VecDeque<(u32, Vec<u8>)>,
 }
+
+/// The id of the request [`Viewer::subscribe`] sends to learn that the
+/// server has taken its subscriptions.
+const PROBE_ID: &str = "naosoccer-viewer-probe";
+
+/// How often [`Viewer::subscribe`] asks again for a channel the server
+/// does not know yet before it gives up.
+const SUBSCRIBE_ATTEMPTS: usize = 1000;
 
 impl Viewer {
     /// Connects to a live server at `addr` (`HOST:PORT`) with the SDK's
@@ -51,6 +62,7 @@ impl Viewer {
         Ok(Viewer {
             ws,
             subs: BTreeMap::new(),
+            early: VecDeque::new(),
         })
     }
 
@@ -84,26 +96,100 @@ impl Viewer {
     }
 
     /// Subscribes to `channels` (advertised channels, as
-    /// [`Viewer::advertised`] returns them), each under its subscription id.
+    /// [`Viewer::advertised`] returns them), each under its subscription id,
+    /// one after the other in the order given, each taken by the server
+    /// before the next is asked for. A caller can so rely on the order: under
+    /// `--wait-viewer` the scene's subscription releases kick-off, and a
+    /// viewer that subscribes to the scene last has every other channel from
+    /// the first tick on.
+    ///
+    /// The SDK sends a channel's advertisement a moment before it takes
+    /// subscriptions for the channel, and answers one that comes in between
+    /// with "Unknown channel ID". So after each subscription this asks the
+    /// server something it always answers (a parameter request) and reads
+    /// up to the answer: a subscription the server refused in between is
+    /// sent again. Message data that arrives meanwhile is kept for
+    /// [`Viewer::next_raw`].
     pub async fn subscribe(&mut self, channels: &[(u32, &Value)]) -> anyhow::Result<()> {
-        let subs: Vec<Value> = channels
-            .iter()
-            .map(|(sub, c)| json!({"id": sub, "channelId": c["id"]}))
-            .collect();
         for (sub, c) in channels {
             let field = |k: &str| c[k].as_str().unwrap_or_default().to_string();
             self.subs
                 .insert(*sub, (field("encoding"), field("schemaName")));
+            let channel = c["id"]
+                .as_u64()
+                .context("an advertised channel without an id")?;
+            let msg =
+                json!({"op": "subscribe", "subscriptions": [{"id": sub, "channelId": channel}]});
+            let mut attempts = 0;
+            loop {
+                self.ws.send(Message::Text(msg.to_string().into())).await?;
+                if !self.refused_channels().await?.contains(&channel) {
+                    break;
+                }
+                attempts += 1;
+                anyhow::ensure!(
+                    attempts < SUBSCRIBE_ATTEMPTS,
+                    "the live server does not know channel {} ({})",
+                    channel,
+                    field("topic")
+                );
+            }
         }
-        let msg = json!({"op": "subscribe", "subscriptions": subs});
-        self.ws.send(Message::Text(msg.to_string().into())).await?;
         Ok(())
+    }
+
+    /// Asks the server a question it always answers (the parameters, which
+    /// it answers with their values, or with an error where it has none) and
+    /// reads up to the answer. The server takes a client's messages in
+    /// order, so every subscription sent before has been taken or refused
+    /// by then. Returns the channels it refused as unknown; message data
+    /// read meanwhile is kept for [`Viewer::next_raw`].
+    async fn refused_channels(&mut self) -> anyhow::Result<BTreeSet<u64>> {
+        let probe = json!({"op": "getParameters", "parameterNames": [], "id": PROBE_ID});
+        self.ws
+            .send(Message::Text(probe.to_string().into()))
+            .await?;
+        let mut refused = BTreeSet::new();
+        loop {
+            let msg = self
+                .ws
+                .next()
+                .await
+                .context("the live server closed while taking subscriptions")??;
+            match msg {
+                Message::Binary(b) if b.len() >= 13 && b[0] == 1 => {
+                    let sub = u32::from_le_bytes([b[1], b[2], b[3], b[4]]);
+                    self.early.push_back((sub, b[13..].to_vec()));
+                }
+                Message::Text(t) => {
+                    let v: Value = serde_json::from_str(&t)?;
+                    let text = v["message"].as_str().unwrap_or_default();
+                    match v["op"].as_str() {
+                        Some("parameterValues") if v["id"] == PROBE_ID => return Ok(refused),
+                        Some("status") if text.contains("parameters") => return Ok(refused),
+                        Some("status") => {
+                            if let Some(id) = text
+                                .strip_prefix("Unknown channel ID: ")
+                                .and_then(|n| n.trim().parse().ok())
+                            {
+                                refused.insert(id);
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                _ => {}
+            }
+        }
     }
 
     /// The next message data frame as (subscription id, payload bytes), or
     /// `None` once the connection is closed or broken. Control messages are
     /// skipped.
     pub async fn next_raw(&mut self) -> Option<(u32, Vec<u8>)> {
+        if let Some(early) = self.early.pop_front() {
+            return Some(early);
+        }
         loop {
             match self.ws.next().await? {
                 // Opcode 1 (message data): subscription id, log time, payload.

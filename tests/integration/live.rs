@@ -87,7 +87,7 @@ async fn match_live_streams_the_scene_and_changes_nothing() {
     assert_eq!(ch["/match/1/tf"]["encoding"], "protobuf");
     assert_eq!(ch["/match/1/state"]["encoding"], "json");
     // The scene last: its subscription releases kick-off (--wait-viewer),
-    // and the SDK takes a request's subscriptions in order.
+    // and `subscribe` has each taken before it asks for the next.
     ws.subscribe(&[
         (2, &ch["/match/1/state"]),
         (3, &ch["/match/1/tf"]),
