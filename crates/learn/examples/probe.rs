@@ -1,19 +1,31 @@
 //! Probes a trained team on states built by hand: what does each robot do
 //! with the ball just ahead, in kick reach before the goal, behind it, to
 //! its left? Prints the action probabilities (the team's sampling policy,
-//! `shoot` masked out of reach as the team plays).
+//! with every mask the team plays with: `shoot` out of reach, and for teams
+//! with them `pass` without a receiver and the roles' bans), for every
+//! action the team has.
 //!
 //! `cargo run --release -p naosoccer-learn --example probe -- ppo:DIR`
 
 use naosoccer_learn::obs::OBS_DIM;
 use naosoccer_learn::LearnedPolicy;
+use naosoccer_policy::actions::{banned_actions, mask_row, MASKED_LOGIT, SHOOT};
 use naosoccer_proto::{Observation, Team};
 use naosoccer_referee::{Match, MatchConfig};
 
 /// A case: its name, the robot's (x, y, heading) and the ball's (x, y).
 type Case = (&'static str, (f32, f32, f32), (f32, f32));
 
-const NAMES: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
+const NAMES: [&str; 8] = [
+    "forward",
+    "turn_left",
+    "turn_right",
+    "shoot",
+    "stay",
+    "pass",
+    "support",
+    "approach",
+];
 
 fn state(base: &Observation, player: usize, me: (f32, f32, f32), ball: (f32, f32)) -> Observation {
     let mut o = base.clone();
@@ -74,13 +86,17 @@ fn main() {
             let o = state(&base, player, me, ball);
             let mut f = vec![0.0f32; OBS_DIM];
             scale.encode(&o, &mut f);
-            let logits = p.outputs(&f, player);
-            let masked = p.decision().is_some_and(|d| d.mask_shoot) && !scale.kick.in_reach(&o);
-            let mx = logits.iter().cloned().fold(f32::MIN, f32::max);
-            let mut e: Vec<f32> = logits.iter().map(|l| (l - mx).exp()).collect();
-            if masked {
-                e[3] = 0.0;
+            // This player's network, masked as the team plays.
+            let mut logits = p.outputs(&f, player);
+            let in_reach = scale.kick.in_reach(&o);
+            if p.decision().is_some_and(|d| d.mask_shoot) && !in_reach {
+                logits[SHOOT] = MASKED_LOGIT;
             }
+            if let Some(d) = p.decision() {
+                mask_row(&mut logits, banned_actions(&o, in_reach, &d));
+            }
+            let mx = logits.iter().cloned().fold(f32::MIN, f32::max);
+            let e: Vec<f32> = logits.iter().map(|l| (l - mx).exp()).collect();
             let z: f32 = e.iter().sum();
             let probs: Vec<String> = e
                 .iter()
