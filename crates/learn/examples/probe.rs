@@ -9,23 +9,12 @@
 
 use naosoccer_learn::obs::OBS_DIM;
 use naosoccer_learn::LearnedPolicy;
-use naosoccer_policy::actions::{banned_actions, mask_row, MASKED_LOGIT, SHOOT};
+use naosoccer_policy::actions::{banned_actions, mask_row, ACTION_NAMES, MASKED_LOGIT, SHOOT};
 use naosoccer_proto::{Observation, Team};
 use naosoccer_referee::{Match, MatchConfig};
 
 /// A case: its name, the robot's (x, y, heading) and the ball's (x, y).
 type Case = (&'static str, (f32, f32, f32), (f32, f32));
-
-const NAMES: [&str; 8] = [
-    "forward",
-    "turn_left",
-    "turn_right",
-    "shoot",
-    "stay",
-    "pass",
-    "support",
-    "approach",
-];
 
 fn state(base: &Observation, player: usize, me: (f32, f32, f32), ball: (f32, f32)) -> Observation {
     let mut o = base.clone();
@@ -100,7 +89,7 @@ fn main() {
             let z: f32 = e.iter().sum();
             let probs: Vec<String> = e
                 .iter()
-                .zip(NAMES)
+                .zip(ACTION_NAMES)
                 .map(|(x, n)| format!("{n} {:.2}", x / z))
                 .collect();
             println!("  player {player}: {}", probs.join(", "));

@@ -22,20 +22,11 @@ use naosoccer_client::policy::{Policy, PolicyKind};
 use naosoccer_learn::obs::{ball_in_robot_frame, ObsScale};
 use naosoccer_learn::policy::is_free;
 use naosoccer_learn::LearnedPolicy;
+use naosoccer_policy::actions::ACTION_NAMES;
 use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::rules::segment_distance;
 use naosoccer_referee::{Match, MatchConfig};
 
-const NAMES: [&str; 8] = [
-    "forward",
-    "turn_left",
-    "turn_right",
-    "shoot",
-    "stay",
-    "pass",
-    "support",
-    "approach",
-];
 /// The team probed: a trained one, or a built-in one robot by robot.
 enum Blue {
     Learned(Box<LearnedPolicy>),
@@ -156,11 +147,11 @@ fn mate_bins(o: &Observation, bins: &mut [[u64; DISTANCES.len()]; BEARINGS.len()
 }
 
 /// The ticks counted in `row` and each action's share of them, as text.
-fn action_shares(row: &[u64; NAMES.len()]) -> (u64, String) {
+fn action_shares(row: &[u64; ACTION_NAMES.len()]) -> (u64, String) {
     let n: u64 = row.iter().sum();
     let shares: Vec<String> = row
         .iter()
-        .zip(NAMES)
+        .zip(ACTION_NAMES)
         .map(|(c, name)| format!("{name} {:.2}", *c as f64 / n.max(1) as f64))
         .collect();
     (n, shares.join(", "))
@@ -190,9 +181,9 @@ fn main() {
         Blue::Learned(t) => t.scale().kick,
         Blue::Builtin(..) => ObsScale::from_config(&cfg).kick,
     };
-    let mut counts = [[0u64; NAMES.len()]; KINDS.len()];
+    let mut counts = [[0u64; ACTION_NAMES.len()]; KINDS.len()];
     // Ball in kick reach with a teammate open where the kick would go.
-    let mut pass_counts = [0u64; NAMES.len()];
+    let mut pass_counts = [0u64; ACTION_NAMES.len()];
     let (mut reach_ticks, mut cone_ticks) = (0u64, [0u64; 3]);
     // In-reach ticks by the third of the pitch the ball is in (own, middle,
     // opponents'), and of those how many the kicker faced its own half.

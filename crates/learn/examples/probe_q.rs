@@ -9,10 +9,9 @@
 //! their kick-off places.
 
 use naosoccer_learn::LearnedPolicy;
+use naosoccer_policy::actions::ACTION_NAMES;
 use naosoccer_proto::{Action, Observation, Team};
 use naosoccer_referee::{Match, MatchConfig};
-
-const ACTIONS: [&str; 5] = ["forward", "turn_left", "turn_right", "shoot", "stay"];
 
 type Scenario = (&'static str, [f32; 3], [f32; 2], &'static [Action]);
 
@@ -96,12 +95,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             sensible += usize::from(ok);
             let cells: Vec<String> = out
                 .iter()
-                .zip(ACTIONS)
+                .zip(ACTION_NAMES)
                 .map(|(v, a)| format!("{a} {v:+.3}"))
                 .collect();
             println!(
                 "  {name:<48} -> {:<10} {} | {}",
-                ACTIONS[best],
+                ACTION_NAMES[best],
                 if ok { "  " } else { "!!" },
                 cells.join("  ")
             );

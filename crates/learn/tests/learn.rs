@@ -128,10 +128,7 @@ fn dqn_learns_the_tiny_task_and_beats_random() {
 }
 
 fn probe_rows() -> Vec<f32> {
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    (0..16 * OBS_DIM)
-        .map(|_| rng.random_range(-1.0..1.0))
-        .collect()
+    random_rows(5, 16)
 }
 
 #[test]
@@ -1183,6 +1180,32 @@ fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
     assert_eq!(staged, 2 * 11);
 }
 
+/// The team preset's actor widened action by action: five actions, then
+/// with `pass`, `support` and `approach` (6, 7 and 8 actions).
+fn widening_configs() -> [naosoccer_learn::ppo::PpoConfig; 4] {
+    use naosoccer_learn::ppo::{PpoConfig, Preset};
+    let five = PpoConfig::preset(Preset::Team);
+    let mut six = five.clone();
+    six.decision.as_mut().unwrap().pass = true;
+    let mut seven = six.clone();
+    seven.decision.as_mut().unwrap().support = true;
+    let mut eight = seven.clone();
+    eight.decision.as_mut().unwrap().approach = true;
+    assert_eq!(
+        [&five, &six, &seven, &eight].map(|c| c.actions()),
+        [5, 6, 7, 8]
+    );
+    [five, six, seven, eight]
+}
+
+/// `n` observation rows of values in [-1, 1), from `seed`.
+fn random_rows(seed: u64, n: usize) -> Vec<f32> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n * OBS_DIM)
+        .map(|_| rng.random_range(-1.0..1.0))
+        .collect()
+}
+
 /// The actor's logits for `n` observation rows, row by row.
 fn actor_logits(p: &naosoccer_learn::ppo::Ppo, rows: &[f32], n: usize) -> Vec<f32> {
     let t = tch::no_grad(|| p.net.logits(&p.net.actor_input(rows, n)));
@@ -1197,25 +1220,19 @@ fn actor_logits(p: &naosoccer_learn::ppo::Ppo, rows: &[f32], n: usize) -> Vec<f3
 /// network of another shape is refused by name.
 #[test]
 fn init_from_widens_the_actor_for_the_pass_action() {
-    use naosoccer_learn::ppo::{Ppo, PpoConfig, Preset, PASS, SHOOT};
+    use naosoccer_learn::ppo::{Ppo, PASS, SHOOT};
     use naosoccer_learn::train::{init_weights, SUPPORT_INIT_BIAS};
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
-    let five = PpoConfig::preset(Preset::Team);
-    let mut six = five.clone();
-    six.decision.as_mut().unwrap().pass = true;
-    assert_eq!((five.actions(), six.actions()), (5, 6));
+    let [five, six, ..] = widening_configs();
     let src = Ppo::new(five.clone(), &scale, 4).unwrap();
     let dir = out_dir("init_from_widens");
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("final.safetensors");
     naosoccer_learn::policy::save_stores(&[&src.net.vs], &file).unwrap();
 
-    let mut rng = ChaCha8Rng::seed_from_u64(3);
     let n = 7;
-    let rows: Vec<f32> = (0..n * OBS_DIM)
-        .map(|_| rng.random_range(-1.0..1.0))
-        .collect();
+    let rows = random_rows(3, n);
     let logits = |p: &Ppo| actor_logits(p, &rows, n);
     let before = logits(&src);
     let mut dst = Ppo::new(six.clone(), &scale, 4).unwrap();
@@ -1292,19 +1309,11 @@ fn init_from_widens_the_actor_for_the_support_action() {
     use naosoccer_policy::SUPPORT;
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
-    let five = PpoConfig::preset(Preset::Team);
-    let mut six = five.clone();
-    six.decision.as_mut().unwrap().pass = true;
-    let mut seven = six.clone();
-    seven.decision.as_mut().unwrap().support = true;
-    assert_eq!(seven.actions(), 7);
+    let [five, six, seven, _] = widening_configs();
     let dir = out_dir("init_from_support");
     std::fs::create_dir_all(&dir).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(4);
     let n = 5;
-    let rows: Vec<f32> = (0..n * OBS_DIM)
-        .map(|_| rng.random_range(-1.0..1.0))
-        .collect();
+    let rows = random_rows(4, n);
     let logits = |p: &Ppo| actor_logits(p, &rows, n);
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-5;
     for (from, k) in [(five, 5usize), (six, 6)] {
@@ -1358,26 +1367,16 @@ fn init_from_widens_the_actor_for_the_support_action() {
 /// with `--approach-only` (no `forward`) it takes `forward`'s place.
 #[test]
 fn init_from_widens_the_actor_for_the_approach_action() {
-    use naosoccer_learn::ppo::{Ppo, PpoConfig, Preset};
+    use naosoccer_learn::ppo::Ppo;
     use naosoccer_learn::train::init_weights;
     use naosoccer_policy::{APPROACH, SUPPORT};
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
-    let five = PpoConfig::preset(Preset::Team);
-    let mut six = five.clone();
-    six.decision.as_mut().unwrap().pass = true;
-    let mut seven = six.clone();
-    seven.decision.as_mut().unwrap().support = true;
-    let mut eight = seven.clone();
-    eight.decision.as_mut().unwrap().approach = true;
-    assert_eq!(eight.actions(), 8);
+    let [five, six, seven, eight] = widening_configs();
     let dir = out_dir("init_from_approach");
     std::fs::create_dir_all(&dir).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(6);
     let n = 5;
-    let rows: Vec<f32> = (0..n * OBS_DIM)
-        .map(|_| rng.random_range(-1.0..1.0))
-        .collect();
+    let rows = random_rows(6, n);
     let logits = |p: &Ppo| actor_logits(p, &rows, n);
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-5;
     for (from, k) in [(five, 5usize), (six, 6), (seven, 7)] {

@@ -35,6 +35,19 @@ pub const SUPPORT: usize = 6;
 /// the ball facing that way ([`approach_action`]).
 pub const APPROACH: usize = 7;
 
+/// The actions' names, by index: the protocol's five, then `pass`,
+/// `support` and `approach`.
+pub const ACTION_NAMES: [&str; MAX_ACTIONS] = [
+    "forward",
+    "turn_left",
+    "turn_right",
+    "shoot",
+    "stay",
+    "pass",
+    "support",
+    "approach",
+];
+
 /// Index of `forward`.
 pub const FORWARD: usize = 0;
 
@@ -318,18 +331,7 @@ pub fn support_spot(obs: &Observation, half: [f32; 2], spot: SupportSpot) -> [f3
     let (lx, ly) = ((half[0] - 0.3).max(0.0), (half[1] - 0.3).max(0.0));
     let mut dir = [1.0, 0.0];
     if spot == SupportSpot::Facing {
-        let mine = obs.player.index();
-        let d = |r: &naosoccer_proto::RobotObs| (r.x - bx).hypot(r.y - by);
-        let kicker = obs
-            .own
-            .iter()
-            .enumerate()
-            .filter(|&(j, r)| j != mine && !r.fallen)
-            .fold(None, |best: Option<(f32, usize)>, (j, r)| match best {
-                Some(b) if b.0 <= d(r) => Some(b),
-                _ => Some((d(r), j)),
-            });
-        if let Some((len, j)) = kicker {
+        if let Some((len, j)) = nearest_standing_teammate(obs) {
             if len > 1e-3 {
                 let k = &obs.own[j];
                 dir = [(bx - k.x) / len, (by - k.y) / len];
@@ -369,15 +371,37 @@ pub fn is_chaser(obs: &Observation, chasers: u32) -> bool {
     if obs.own[me].fallen {
         return false;
     }
-    let d = |r: &naosoccer_proto::RobotObs| (r.x - obs.ball.x).hypot(r.y - obs.ball.y);
-    let mine = d(&obs.own[me]);
-    let nearer = obs
-        .own
-        .iter()
-        .enumerate()
-        .filter(|&(j, r)| j != me && !r.fallen && (d(r) < mine || (d(r) == mine && j < me)))
+    let mine = ball_distance(obs, &obs.own[me]);
+    let nearer = standing_teammates(obs)
+        .filter(|&(j, d)| d < mine || (d == mine && j < me))
         .count();
     nearer < chasers as usize
+}
+
+/// How far `r` stands from the ball in `obs`, metres.
+fn ball_distance(obs: &Observation, r: &naosoccer_proto::RobotObs) -> f32 {
+    (r.x - obs.ball.x).hypot(r.y - obs.ball.y)
+}
+
+/// The standing teammates of the robot that received `obs` (not the robot
+/// itself), as (player number, distance to the ball), by player number.
+fn standing_teammates(obs: &Observation) -> impl Iterator<Item = (usize, f32)> + '_ {
+    let me = obs.player.index();
+    obs.own
+        .iter()
+        .enumerate()
+        .filter(move |&(j, r)| j != me && !r.fallen)
+        .map(|(j, r)| (j, ball_distance(obs, r)))
+}
+
+/// The standing teammate nearest the ball (on a tie the lower player
+/// number; not the robot itself), as (distance to the ball, player
+/// number), or `None` with every teammate down.
+fn nearest_standing_teammate(obs: &Observation) -> Option<(f32, usize)> {
+    standing_teammates(obs).fold(None, |best, (j, d)| match best {
+        Some((b, _)) if b <= d => best,
+        _ => Some((d, j)),
+    })
 }
 
 /// The actions a robot that is not one of its team's chasers may not choose
@@ -390,8 +414,8 @@ pub const ROLE_BANNED: u8 = 1 << FORWARD | 1 << TURN_LEFT | 1 << TURN_RIGHT;
 pub const SUPPORT_ONLY_BANNED: u8 = ROLE_BANNED | 1 << STAY;
 
 /// What no robot may choose under [`DecisionConfig::approach_only`]:
-/// `forward` and the turns.
-pub const APPROACH_ONLY_BANNED: u8 = 1 << FORWARD | 1 << TURN_LEFT | 1 << TURN_RIGHT;
+/// `forward` and the turns, the bits of [`ROLE_BANNED`].
+pub const APPROACH_ONLY_BANNED: u8 = ROLE_BANNED;
 
 /// The actions, beyond a `shoot` out of reach, that the robot that received
 /// `obs` may not choose now under `decision`, as bits (`1 << index`):
