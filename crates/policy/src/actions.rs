@@ -253,11 +253,16 @@ pub fn approach_action(obs: &Observation, half: [f32; 2]) -> Action {
             let along = rel[0] * u[0] + rel[1] * u[1];
             let across = u[0] * rel[1] - u[1] * rel[0];
             let target = if along > -0.15 && across.abs() < 0.45 {
-                // The ball is in the way: go wide of it first.
+                // The ball is in the way: go wide of it first, to a point
+                // as far behind the ball as the line-up point. Walking there
+                // always leaves this region; a point on its edge (0.15 m
+                // behind, as the scripted team goes wide) could leave the
+                // robot there, turning left and right for ever as it
+                // swayed across the edge.
                 let side = if across >= 0.0 { 1.0 } else { -1.0 };
                 [
-                    ball[0] - u[1] * side * 0.5 - u[0] * 0.15,
-                    ball[1] + u[0] * side * 0.5 - u[1] * 0.15,
+                    ball[0] - u[1] * side * 0.5 - u[0] * APPROACH_BEHIND,
+                    ball[1] + u[0] * side * 0.5 - u[1] * APPROACH_BEHIND,
                 ]
             } else {
                 [

@@ -84,6 +84,44 @@ fn approach_goes_round_behind_the_ball_and_takes_it_toward_the_goal() {
     assert!(x1 > x0 + 0.3, "it walked on with the ball: {x0} -> {x1}");
 }
 
+/// From anywhere round the ball, facing any way, `approach` brings the ball
+/// into kick reach with the robot facing the opponent goal (within 0.8 rad:
+/// the line-up's 0.5 rad and the walk's cone): twelve starts
+/// on a circle of 0.5 m round a ball in the centre circle, each facing a
+/// different way. (A wide point on the edge of the region where the ball is
+/// in the way once left a robot turning left and right on the spot.)
+#[test]
+fn approach_reaches_the_ball_from_every_side() {
+    let reach = KickReach::default();
+    for k in 0..12 {
+        let a = k as f32 * PI / 6.0;
+        let me = (0.2 + 0.5 * a.cos(), 0.1 + 0.5 * a.sin(), a * 2.3);
+        let mut m = staged(me, (-2.0, -1.5, 0.0), (0.2, 0.1));
+        let h = half(&m);
+        let mut reached = None;
+        for t in 0..900 {
+            let obs = m.observe(Team::Blue, 1);
+            if reach.in_reach(&obs) {
+                let to_goal = (-obs.ball.y).atan2(h[0] - obs.ball.x);
+                let off = naosoccer_referee::rules::wrap_angle(obs.me().heading - to_goal);
+                assert!(
+                    off.abs() < 0.8,
+                    "start {k}: in reach {off} rad off the goal"
+                );
+                reached = Some(t);
+                break;
+            }
+            let mut joint = [Action::Stay; ROBOTS];
+            joint[1] = approach_action(&obs, h);
+            m.step(&joint);
+        }
+        assert!(
+            reached.is_some(),
+            "start {k} at {me:?}: no ball in reach in 90 s"
+        );
+    }
+}
+
 /// `approach` is a step of the protocol's walk and turns, and a lying robot
 /// stays.
 #[test]
