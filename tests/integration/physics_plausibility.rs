@@ -45,9 +45,14 @@ const LIE_DRIFT: f32 = 0.05;
 const LIE_TURN: f32 = 0.2;
 /// A ball resting on a foot longer than this fails, seconds.
 const FOOT_REST: f32 = 0.5;
+/// A collider centred less than this above the soles is a foot, metres.
+const FOOT_TOP: f32 = 0.03;
+/// A collider centred this far or more below the torso origin (the hips'
+/// height, NAO's HipOffsetZ) is part of the legs, metres.
+const HIP_DEPTH: f32 = 0.085;
 
 /// One robot collider: its shape, pose in the torso frame, and whether it is
-/// part of a leg (thigh, shin, foot).
+/// part of the legs (below the hips) or a foot.
 struct Part {
     shape: SharedShape,
     local: Pose,
@@ -56,7 +61,8 @@ struct Part {
 }
 
 fn parts(model: &RobotModel) -> Vec<Part> {
-    model
+    let sole = -model.torso_height();
+    let parts: Vec<Part> = model
         .collision_shapes()
         .iter()
         .map(|s| {
@@ -81,8 +87,13 @@ fn parts(model: &RobotModel) -> Vec<Part> {
                     s.pose,
                 ),
             };
-            let foot = s.link.ends_with("Foot");
-            let leg = foot || s.link.ends_with("Tibia") || s.link.ends_with("Thigh");
+            // By where a part sits in the standing robot, not by its link:
+            // the URDF gives both legs one block and both feet two rollers
+            // across the soles. Feet are the parts that reach the soles,
+            // legs everything below the hips.
+            let z = s.pose.translation.z;
+            let foot = z < sole + FOOT_TOP;
+            let leg = z < -HIP_DEPTH;
             Part {
                 shape,
                 local,
@@ -90,7 +101,12 @@ fn parts(model: &RobotModel) -> Vec<Part> {
                 foot,
             }
         })
-        .collect()
+        .collect();
+    assert!(
+        parts.iter().any(|p| p.foot) && parts.iter().any(|p| p.leg && !p.foot),
+        "the robot model has no feet or no legs to audit"
+    );
+    parts
 }
 
 /// The distance between two placed shapes, 0 when they overlap.
