@@ -35,6 +35,13 @@ fn half(m: &Match) -> [f32; 2] {
     [f.half_length, f.half_width]
 }
 
+/// How far (rad) the robot that received `obs` faces off the line from the
+/// ball to the middle of the opponent goal, on a pitch of half size `h`.
+fn goal_offset(obs: &naosoccer_proto::Observation, h: [f32; 2]) -> f32 {
+    let to_goal = (-obs.ball.y).atan2(h[0] - obs.ball.x);
+    naosoccer_referee::rules::wrap_angle(obs.me().heading - to_goal)
+}
+
 /// Blue 1 stands between the ball and the opponent goal, its back to that
 /// goal. `approach` takes it round the ball (not through it: the ball does
 /// not go back toward blue's own goal) until the ball is in kick reach with
@@ -54,9 +61,7 @@ fn approach_goes_round_behind_the_ball_and_takes_it_toward_the_goal() {
             obs.ball.y
         );
         if reach.in_reach(&obs) {
-            let me = obs.me();
-            let to_goal = (-obs.ball.y).atan2(h[0] - obs.ball.x);
-            let off = naosoccer_referee::rules::wrap_angle(me.heading - to_goal);
+            let off = goal_offset(&obs, h);
             assert!(
                 off.abs() < 0.6,
                 "tick {t}: in reach facing {off} rad off the goal"
@@ -102,8 +107,7 @@ fn approach_reaches_the_ball_from_every_side() {
         for t in 0..900 {
             let obs = m.observe(Team::Blue, 1);
             if reach.in_reach(&obs) {
-                let to_goal = (-obs.ball.y).atan2(h[0] - obs.ball.x);
-                let off = naosoccer_referee::rules::wrap_angle(obs.me().heading - to_goal);
+                let off = goal_offset(&obs, h);
                 assert!(
                     off.abs() < 0.8,
                     "start {k}: in reach {off} rad off the goal"
