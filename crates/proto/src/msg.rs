@@ -24,7 +24,7 @@ pub const PROTOCOL_NAME: &str = "naosoccer";
 
 /// This build's protocol version. Peers must agree on `major`; a higher
 /// `minor` only adds optional fields and message types.
-pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 3 };
+pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 4 };
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Version {
