@@ -29,7 +29,8 @@ mod world;
 pub use config::SimConfig;
 pub use hash::StateHasher;
 pub use model::{
-    CollisionShape, JointInfo, Primitive, RobotModel, NAO_URDF, ROOT_LINK, STANDING_POSE,
+    CollisionShape, JointInfo, Primitive, RobotModel, CAPSULE_SUFFIX, NAO_URDF, ROOT_LINK,
+    STANDING_POSE,
 };
 pub use sim::Sim;
 pub use world::BareWorld;
