@@ -722,6 +722,33 @@ mod tests {
     use super::*;
     use crate::types::{BallObs, RobotObs, ScoreObs};
 
+    #[test]
+    fn fills_are_strings_on_the_wire_levels_included() {
+        for (fill, text) in [
+            (Fill::Scripted, "scripted"),
+            (Fill::Idle, "idle"),
+            (Fill::ScriptedLevel(1), "scripted:1"),
+            (Fill::ScriptedLevel(5), "scripted:5"),
+        ] {
+            assert_eq!(serde_json::to_value(fill).unwrap(), text);
+            assert_eq!(serde_json::from_value::<Fill>(text.into()).unwrap(), fill);
+            assert_eq!(text.parse::<Fill>(), Ok(fill));
+        }
+        for bad in [
+            "scripted:0",
+            "scripted:6",
+            "scripted:x",
+            "scripted:",
+            "level",
+        ] {
+            let e = serde_json::from_value::<Fill>(bad.into()).unwrap_err();
+            assert!(e.to_string().contains("unknown fill"), "{bad}: {e}");
+        }
+        let req: CreateMatch =
+            serde_json::from_str(r#"{"token": "t", "fill": "scripted:4"}"#).unwrap();
+        assert_eq!(req.fill, Some(Fill::ScriptedLevel(4)));
+    }
+
     fn obs(player: u8) -> Observation {
         Observation {
             tick: Tick::new(7),

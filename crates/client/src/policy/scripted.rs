@@ -427,10 +427,11 @@ impl Scripted {
     }
 
     fn decide(&mut self, obs: &Observation) -> Action {
-        if self.p.set_play_guard > 0.0 && obs.player.index() != 0 {
-            if obs.set_play.is_some_and(|sp| !sp.own) {
-                return self.guard_set_play(obs);
-            }
+        if self.p.set_play_guard > 0.0
+            && obs.player.index() != 0
+            && obs.set_play.is_some_and(|sp| !sp.own)
+        {
+            return self.guard_set_play(obs);
         }
         if obs.player.index() == 0 {
             self.keeper(obs)
@@ -755,7 +756,9 @@ impl Policy for Scripted {
         }
         if self.p.react_ticks > 1.0 {
             let k = self.p.react_ticks as u64;
-            if (obs.tick.get() + obs.player.index() as u64) % k != 0 {
+            // (Not `is_multiple_of`: the library crates keep Rust 1.86.)
+            let phase = (obs.tick.get() + obs.player.index() as u64) % k;
+            if phase != 0 {
                 return self.last;
             }
         }
