@@ -280,6 +280,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
             info["score"] = {"own": own, "opponent": opp}
             info["match_end"] = end
             info["stats"] = end["stats"]
+            info["goals_by_phase"] = goals_by_phase(end["stats"])
             infos[a] = info
         self.agents = []
         return obs, rewards, terminations, truncations, infos
@@ -386,3 +387,16 @@ def _with_side(event: Dict[str, Any], team: str) -> Dict[str, Any]:
     if owner is not None:
         e["side"] = "own" if owner == team else "opponent"
     return e
+
+
+#: The goals-by-phase fields of a team's ``match_end`` statistics (protocol 1.4).
+GOAL_PHASES = ("open_play", "restart", "own_goal", "disallowed")
+
+
+def goals_by_phase(stats: Dict[str, Any]) -> Dict[str, Dict[str, int]]:
+    """Per team, its goals by phase from ``match_end``'s ``stats``:
+    ``open_play``, ``restart`` (from its own kick-off or set play),
+    ``own_goal`` (the other team's own goals; the three sum to its goals) and
+    ``disallowed`` (goals straight from its kick-off, which did not count).
+    0 where a server older than protocol 1.4 sent none."""
+    return {team: {p: int(s.get(f"goals_{p}", 0)) for p in GOAL_PHASES} for team, s in stats.items()}

@@ -21,7 +21,9 @@ use naosoccer_sim::{BareWorld, RobotModel};
 With --json, stdout holds exactly one JSON object:
   {\"seed\", \"ticks\", \"sim_seconds\", \"wall_seconds\",
    \"score\": {\"blue\", \"red\"},
-   \"stats\": {\"blue\": {\"goals\", \"control_rate\", \"passes\", \"shots\", \"falls\", \"out_of_bounds\"}, \"red\": {...}},
+   \"stats\": {\"blue\": {\"goals\", \"goals_open_play\", \"goals_restart\", \"goals_own_goal\",
+     \"goals_disallowed\", \"control_rate\", \"passes\", \"shots\", \"falls\", \"out_of_bounds\", ...},
+     \"red\": {...}},
    \"state_hash\"}
 state_hash is the final match state's hash as 16 hex digits: the same seed,
 config and policies give the same hash on the same build.
@@ -30,7 +32,11 @@ Statistics: control_rate is the share of the ticks in which any team controlled
 the ball (the paper's if_c) that this team did; a pass is possession moving
 between teammates after a kick by the first; shots count every kick that moved
 the ball; out_of_bounds counts the team's robots that left the field and the
-balls it put out (last touch).")]
+balls it put out (last touch). Goals by phase: goals_open_play,
+goals_restart (from the team's own kick-off or set play: only its robots touched
+the ball since, within 15 s) and goals_own_goal (the other team's own goals) sum
+to goals; goals_disallowed counts goals straight from the team's kick-off, which
+do not count (docs/PROTOCOL.md, \"Restarts and set plays\").")]
 pub struct MatchArgs {
     /// Match seed: with the same config and policies, the same seed plays the
     /// same match (gait and kick noise, random policies).
@@ -277,6 +283,10 @@ fn print_table(args: &MatchArgs, o: &MatchOutcome) {
         );
     };
     row("goals", &|t| t.goals.to_string());
+    row("  open play", &|t| t.goals_open_play.to_string());
+    row("  own restarts", &|t| t.goals_restart.to_string());
+    row("  own goals for", &|t| t.goals_own_goal.to_string());
+    row("disallowed", &|t| t.goals_disallowed.to_string());
     row("ball control", &|t| {
         format!("{:.1}%", 100.0 * t.control_rate)
     });

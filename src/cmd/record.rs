@@ -204,15 +204,29 @@ fn print_summary(rec: &Recording) {
                 if f.completed { "" } else { " (stopped early)" }
             );
             println!(
-                "{:<6} {:>6} {:>8} {:>7} {:>6} {:>6} {:>5}",
-                "team", "goals", "control", "passes", "shots", "falls", "outs"
+                "{:<6} {:>6} {:>10} {:>8} {:>9} {:>11} {:>8} {:>7} {:>6} {:>6} {:>5}",
+                "team",
+                "goals",
+                "open play",
+                "restart",
+                "own goal",
+                "disallowed",
+                "control",
+                "passes",
+                "shots",
+                "falls",
+                "outs"
             );
             for team in Team::BOTH {
                 let s = f.stats.team(team);
                 println!(
-                    "{:<6} {:>6} {:>7.1}% {:>7} {:>6} {:>6} {:>5}",
+                    "{:<6} {:>6} {:>10} {:>8} {:>9} {:>11} {:>7.1}% {:>7} {:>6} {:>6} {:>5}",
                     team.to_string(),
                     s.goals,
+                    s.goals_open_play,
+                    s.goals_restart,
+                    s.goals_own_goal,
+                    s.goals_disallowed,
                     100.0 * s.control_rate,
                     s.passes,
                     s.shots,

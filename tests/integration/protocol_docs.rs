@@ -159,3 +159,122 @@ fn the_document_is_this_builds_version_with_a_changelog_row() {
         "no changelog row for {PROTOCOL_VERSION}"
     );
 }
+
+/// Issue 39: the `hello` and `welcome` examples (and the Python client's
+/// `hello`) name this build's version, so a client copied from them says
+/// what the server says.
+#[test]
+fn examples_name_this_builds_version() {
+    use naosoccer_proto::msg::PROTOCOL_VERSION;
+    let mut seen = 0;
+    for text in blocks("json") {
+        let value: Value = serde_json::from_str(&text).unwrap();
+        if matches!(value["type"].as_str(), Some("hello" | "welcome")) {
+            let version: naosoccer_proto::msg::Version =
+                serde_json::from_value(value["version"].clone()).unwrap();
+            assert_eq!(version, PROTOCOL_VERSION, "{text}");
+            seen += 1;
+        }
+    }
+    assert_eq!(seen, 2, "one hello and one welcome example");
+    let python = blocks("python").concat();
+    let hello = format!(
+        r#""version": {{"major": {}, "minor": {}}}"#,
+        PROTOCOL_VERSION.major, PROTOCOL_VERSION.minor
+    );
+    assert!(
+        python.contains(&hello),
+        "the Python client's hello: {hello}"
+    );
+}
+
+/// Issue 39: a goal kick's spot is the front corner of the goal area,
+/// ±(field_length/2 − goal_area_depth), ±goal_area_width/2, as the
+/// document says, (±2.4, ±1.7) by default.
+#[test]
+fn goal_kick_spot_is_the_front_corner_of_the_goal_area() {
+    use naosoccer_proto::{SetPlayKind, Team};
+    use naosoccer_referee::rules::{OutOfBoundsRule, Restart};
+    use naosoccer_referee::{Field, MatchConfig};
+    let cfg = MatchConfig::default();
+    let r = &cfg.rules;
+    assert_eq!((r.goal_area_depth, r.goal_area_width), (0.6, 3.4));
+    assert_eq!((cfg.sim.field_length, cfg.sim.field_width), (6.0, 4.5));
+    assert!(DOC.contains("that is (±2.4, ±1.7)"));
+    let rule = OutOfBoundsRule::new(
+        Field::from_sim(&cfg.sim),
+        r.ball_inset,
+        r.robot_out_margin,
+        r.goal_area_depth,
+        r.goal_area_width,
+    );
+    let at = |x: f32, y: f32, last: Option<Team>| {
+        let Some(Restart { kind, team, x, y }) = rule.restart(x, y, last) else {
+            panic!("({x}, {y}) is out");
+        };
+        assert_eq!(kind, SetPlayKind::GoalKick);
+        (team, (x * 1e3).round() / 1e3, (y * 1e3).round() / 1e3)
+    };
+    // Blue last touched it, over red's goal line (+x), right of the goal.
+    assert_eq!(at(3.2, -1.6, Some(Team::Blue)), (Team::Red, 2.4, -1.7));
+    // Nobody touched it, over blue's line, left of the goal.
+    assert_eq!(at(-3.3, 0.9, None), (Team::Blue, -2.4, 1.7));
+    // Over the crossbar at y = 0: the + side.
+    assert_eq!(at(3.2, 0.0, Some(Team::Blue)), (Team::Red, 2.4, 1.7));
+}
+
+/// Issue 39: the halves split the ticks as section 5 says, and a goal on
+/// the first half's last tick counts but leaves the kick-off to the team
+/// that did not kick off the first half, not to the team that conceded.
+#[test]
+fn a_goal_on_the_last_tick_of_the_first_half_leaves_the_kick_off_to_the_second_half() {
+    use naosoccer_proto::{Action, Event, Team, Tick, ROBOTS};
+    use naosoccer_referee::rules::Clock;
+    use naosoccer_referee::{FirstKickOff, Match, MatchConfig};
+    // 61 ticks: the first half is ticks 0..=29, the second 30..=60.
+    let clock = Clock::new(6.1 / 60.0, 10.0, 2);
+    assert_eq!(clock.total_ticks(), 61);
+    assert_eq!([29, 30, 60].map(|t| clock.half(Tick::new(t))), [1, 2, 2]);
+
+    let mut cfg = MatchConfig {
+        minutes: 6.0 / 60.0,
+        ..MatchConfig::default()
+    };
+    cfg.rules.first_kickoff = FirstKickOff::Blue;
+    let mut m = Match::new(&cfg, 1).unwrap();
+    assert_eq!(m.total_ticks(), 60);
+    let stay = [Action::Stay; ROBOTS];
+    while m.tick() < Tick::new(29) {
+        m.step(&stay);
+    }
+    // Red scores into blue's goal (-x) on tick 29, the first half's last:
+    // blue conceded, yet red kicks off the second half (blue kicked off the
+    // first).
+    m.sim_mut().place_ball(-2.95, 0.5);
+    m.sim_mut().set_ball_velocity(-3.0, 0.0);
+    let events: Vec<Event> = m.step(&stay).to_vec();
+    let tick = Tick::new(29);
+    let kinds: Vec<&Event> = events
+        .iter()
+        .filter(|e| {
+            matches!(
+                e,
+                Event::Goal { .. } | Event::HalfTime { .. } | Event::KickOff { .. }
+            )
+        })
+        .collect();
+    assert!(
+        matches!(
+            kinds.as_slice(),
+            [
+                Event::Goal { tick: t0, team: Team::Red, .. },
+                Event::HalfTime { tick: t1 },
+                Event::KickOff { tick: t2, team: Team::Red },
+            ] if [*t0, *t1, *t2] == [tick; 3]
+        ),
+        "{events:?}"
+    );
+    assert_eq!((m.score().blue, m.score().red), (0, 1));
+    assert_eq!(m.half(), 2);
+    assert_eq!(m.set_play().map(|(_, team, _)| team), Some(Team::Red));
+}

@@ -481,3 +481,160 @@ async fn errors_for_undecodable_fields_are_pairable() {
     assert_eq!(c.ping(4).await.unwrap(), 4);
     server.stop().await;
 }
+
+/// Issue 39: a frame nested far deeper than serde_json parses (30,000
+/// levels, within the frame cap) is refused as `invalid_argument`, and the
+/// error still names its `type` (and an action's `tick`): every frame that
+/// is a JSON object with a string `type` gets `in_reply_to`. A payload that
+/// deep but not valid JSON, or without a `type`, still gets none.
+#[tokio::test]
+async fn issue_39_an_error_for_a_frame_nested_30000_deep_names_its_type() {
+    let server = start(config(10)).await;
+    let mut c = Client::connect(server.addr().as_str(), "deep")
+        .await
+        .unwrap();
+    let deep = |head: &str, cut: usize| {
+        format!(
+            r#"{{{head}"x":{}{}}}"#,
+            "[".repeat(30_000),
+            "]".repeat(30_000 - cut)
+        )
+    };
+    let cases = [
+        (
+            deep(r#""type":"create_match","#, 0),
+            Some("create_match"),
+            None,
+        ),
+        (
+            deep(r#""type":"action","tick":3,"#, 0),
+            Some("action"),
+            Some(3),
+        ),
+        (deep(r#""type":"teleport","#, 0), Some("unknown"), None),
+        (deep(r#""type":"ping","#, 1), None, None),
+        (deep("", 0), None, None),
+    ];
+    for (json, kind, tick) in &cases {
+        assert!(json.len() < 65_536);
+        c.send_raw(&raw(json)).await.unwrap();
+        let e = expect_error(&mut c, ErrorCode::InvalidArgument, false).await;
+        assert_eq!(e.in_reply_to.as_deref(), *kind, "{}", &json[..40]);
+        assert_eq!(e.tick, tick.map(Tick::new), "{}", &json[..40]);
+    }
+    assert_eq!(c.ping(7).await.unwrap(), 7);
+    server.stop().await;
+}
+
+/// Issue 39: the ranges of `seed`, `deadline_ms`, `match_id` and `nonce`
+/// are what docs/PROTOCOL.md says: unsigned 64-bit integers written without
+/// fraction or exponent (`deadline_ms` in 1..=600000), `null` for an
+/// optional field is leaving it out, everything else `invalid_argument`
+/// naming the request.
+#[tokio::test]
+async fn issue_39_integer_fields_accept_and_refuse_as_documented() {
+    let mut cfg = config(10);
+    cfg.start_players = 8; // the matches created here only wait
+    let server = start(cfg).await;
+    let mut c = Client::connect(server.addr().as_str(), "ranges")
+        .await
+        .unwrap();
+    // Sends one request and reads its reply, as the doc's pairing says.
+    async fn ask(c: &mut Client, json: &str) -> ServerMsg {
+        c.send_raw(&raw(json)).await.unwrap();
+        c.recv().await.unwrap()
+    }
+    let refused = |msg: ServerMsg, request: &str, code: ErrorCode| match msg {
+        ServerMsg::Error(e) => {
+            assert_eq!(e.code, code, "{e}");
+            assert!(!e.fatal, "{e}");
+            assert_eq!(e.in_reply_to.as_deref(), Some(request), "{e}");
+        }
+        other => panic!("{request} should be refused with {code}: {other:?}"),
+    };
+    const MAX: &str = "18446744073709551615";
+    const OVER: &str = "18446744073709551616";
+    let bad_integers = ["-1", "-0", "1.0", "1e2", OVER, r#""1""#];
+
+    // ping's nonce: any u64, echoed; null is not "left out".
+    for nonce in ["0", "17", MAX] {
+        let json = format!(r#"{{"type":"ping","nonce":{nonce}}}"#);
+        match ask(&mut c, &json).await {
+            ServerMsg::Pong(p) => assert_eq!(p.nonce.to_string(), nonce),
+            other => panic!("{json}: {other:?}"),
+        }
+    }
+    for nonce in bad_integers.iter().chain(&["null"]) {
+        let json = format!(r#"{{"type":"ping","nonce":{nonce}}}"#);
+        refused(ask(&mut c, &json).await, "ping", ErrorCode::InvalidArgument);
+    }
+
+    // create_match's seed and deadline_ms.
+    let create = |field: &str, value: &str| {
+        format!(r#"{{"type":"create_match","token":"{ADMIN}","{field}":{value}}}"#)
+    };
+    let created = |msg: ServerMsg| match msg {
+        ServerMsg::MatchCreated(m) => m.info,
+        other => panic!("not created: {other:?}"),
+    };
+    for seed in ["0", MAX] {
+        let info = created(ask(&mut c, &create("seed", seed)).await);
+        assert_eq!(info.seed.to_string(), seed);
+    }
+    // null: the default, server seed + match id - 1.
+    let info = created(ask(&mut c, &create("seed", "null")).await);
+    assert_eq!(info.seed, 42 + info.match_id.0 - 1);
+    for seed in bad_integers {
+        let reply = ask(&mut c, &create("seed", seed)).await;
+        refused(reply, "create_match", ErrorCode::InvalidArgument);
+    }
+    for ms in ["1", "600000"] {
+        let info = created(ask(&mut c, &create("deadline_ms", ms)).await);
+        assert_eq!(info.deadline_ms.to_string(), ms);
+    }
+    for ms in bad_integers.iter().chain(&["0", "600001", MAX]) {
+        let reply = ask(&mut c, &create("deadline_ms", ms)).await;
+        refused(reply, "create_match", ErrorCode::InvalidArgument);
+    }
+    let listed: Vec<u64> = c
+        .list_matches()
+        .await
+        .unwrap()
+        .iter()
+        .map(|m| m.match_id.0)
+        .collect();
+    assert_eq!(listed, [1, 2, 3, 4, 5, 6], "refused requests made no match");
+
+    // match_id: a u64 that names no match is not_found, 0 included.
+    for id in ["0", "7", MAX] {
+        let join = format!(
+            r#"{{"type":"join","match_id":{id},"team":"blue","token":"{BLUE}","players":[0]}}"#
+        );
+        refused(ask(&mut c, &join).await, "join", ErrorCode::NotFound);
+        let end = format!(r#"{{"type":"end_match","token":"{ADMIN}","match_id":{id}}}"#);
+        refused(ask(&mut c, &end).await, "end_match", ErrorCode::NotFound);
+    }
+    for id in bad_integers.iter().chain(&["null"]) {
+        let end = format!(r#"{{"type":"end_match","token":"{ADMIN}","match_id":{id}}}"#);
+        refused(
+            ask(&mut c, &end).await,
+            "end_match",
+            ErrorCode::InvalidArgument,
+        );
+    }
+    for id in bad_integers {
+        let join = format!(
+            r#"{{"type":"join","match_id":{id},"team":"blue","token":"{BLUE}","players":[0]}}"#
+        );
+        refused(ask(&mut c, &join).await, "join", ErrorCode::InvalidArgument);
+    }
+    // null: no match named, the oldest unfinished one with the slot free.
+    let join = format!(
+        r#"{{"type":"join","match_id":null,"team":"blue","token":"{BLUE}","players":[0]}}"#
+    );
+    match ask(&mut c, &join).await {
+        ServerMsg::Joined(j) => assert_eq!(j.match_id, MatchId(1)),
+        other => panic!("{other:?}"),
+    }
+    server.stop().await;
+}

@@ -702,3 +702,56 @@ async fn first_error(stream: TcpStream) -> ErrorMsg {
         other => panic!("{other:?}"),
     }
 }
+
+/// Issue 39: `match_list` holds the 64 most recently finished matches at
+/// every moment (it held 65 until the next `create_match`), chosen by when
+/// they finished, not by id; a forgotten match is `not_found`.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn issue_39_the_list_keeps_the_64_most_recently_finished_matches() {
+    let mut cfg = config(100);
+    cfg.start_players = 8; // nobody joins: every match waits until ended
+    let server = start(cfg).await;
+    let mut admin = Client::connect(server.addr(), "admin").await.unwrap();
+    let finished = |list: &[MatchInfo]| -> Vec<u64> {
+        list.iter()
+            .filter(|m| m.state == MatchState::Finished)
+            .map(|m| m.match_id.0)
+            .collect()
+    };
+    // Match 1 (from the config) waits while 64 others are made and ended.
+    for n in 1..=64u64 {
+        let info = admin
+            .create_match(CreateMatch {
+                token: ADMIN.into(),
+                ..CreateMatch::default()
+            })
+            .await
+            .unwrap();
+        assert_eq!(info.match_id, MatchId(n + 1));
+        admin.end_match(ADMIN, info.match_id).await.unwrap();
+        let list = admin.list_matches().await.unwrap();
+        assert_eq!(finished(&list), (2..=n + 1).collect::<Vec<_>>());
+        assert_eq!(list[0].match_id, MatchId(1));
+    }
+    // Match 1 finishes last: it is kept, and match 2, the earliest to
+    // finish, is forgotten at once.
+    admin.end_match(ADMIN, MatchId(1)).await.unwrap();
+    let list = admin.list_matches().await.unwrap();
+    let mut expected = vec![1];
+    expected.extend(3..=65);
+    assert_eq!(finished(&list), expected);
+    assert_eq!(list.len(), 64);
+    let err = admin.end_match(ADMIN, MatchId(2)).await.unwrap_err();
+    assert_eq!(err.code(), Some(ErrorCode::NotFound));
+    let err = admin
+        .join(
+            Some(MatchId(2)),
+            Team::Blue,
+            BLUE,
+            &[Player::new(0).unwrap()],
+        )
+        .await
+        .unwrap_err();
+    assert_eq!(err.code(), Some(ErrorCode::NotFound));
+    server.stop().await;
+}

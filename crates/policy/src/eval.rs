@@ -199,6 +199,10 @@ impl MatchResult {
             passes: pair(&|first| team(first).passes),
             long_passes: pair(&|first| *self.long_passes.get(self.team_of(first))),
             shots: pair(&|first| team(first).shots),
+            goals_open_play: pair(&|first| team(first).goals_open_play),
+            goals_restart: pair(&|first| team(first).goals_restart),
+            goals_own_goal: pair(&|first| team(first).goals_own_goal),
+            goals_disallowed: pair(&|first| team(first).goals_disallowed),
             state_hash: self.state_hash,
         }
     }
@@ -224,6 +228,17 @@ pub struct MatchRecord {
     #[serde(default)]
     pub long_passes: [u32; 2],
     pub shots: [u32; 2],
+    /// Goals by phase (protocol 1.4's statistics; 0 in reports written
+    /// before them): from open play, from the team's own restarts, and the
+    /// other team's own goals; and goals that did not count.
+    #[serde(default)]
+    pub goals_open_play: [u32; 2],
+    #[serde(default)]
+    pub goals_restart: [u32; 2],
+    #[serde(default)]
+    pub goals_own_goal: [u32; 2],
+    #[serde(default)]
+    pub goals_disallowed: [u32; 2],
     /// The match's final state hash (the same on every machine of one build).
     pub state_hash: u64,
 }
@@ -519,6 +534,14 @@ pub struct TeamSummary {
     /// Passes of at least [`LONG_PASS_METRES`].
     pub long_passes: Estimate,
     pub shots: Estimate,
+    /// Goals by phase, a match: from open play, from its own restarts, the
+    /// other team's own goals, and its goals that did not count.
+    pub goals_open_play: Estimate,
+    pub goals_restart: Estimate,
+    pub goals_own_goal: Estimate,
+    pub goals_disallowed: Estimate,
+    /// The other team's open-play goals, a match.
+    pub goals_open_play_against: Estimate,
     pub wins: usize,
     pub draws: usize,
     pub losses: usize,
@@ -559,6 +582,11 @@ pub fn summarise(records: &[MatchRecord], first_name: &str, second_name: &str) -
             passes: col(&|r| f64::from(r.passes[k])),
             long_passes: col(&|r| f64::from(r.long_passes[k])),
             shots: col(&|r| f64::from(r.shots[k])),
+            goals_open_play: col(&|r| f64::from(r.goals_open_play[k])),
+            goals_restart: col(&|r| f64::from(r.goals_restart[k])),
+            goals_own_goal: col(&|r| f64::from(r.goals_own_goal[k])),
+            goals_disallowed: col(&|r| f64::from(r.goals_disallowed[k])),
+            goals_open_play_against: col(&|r| f64::from(r.goals_open_play[1 - k])),
             wins,
             draws: as_blue.draws + as_red.draws,
             losses: as_blue.losses + as_red.losses,
@@ -577,7 +605,7 @@ pub fn format_table(rows: &[TeamSummary], matches: usize, first_match: usize) ->
         .any(|r| r.as_red.matches() > 0 && r.as_blue.matches() > 0);
     let mut s = format!(
         "{matches} matches{}{}, mean ± 95% CI; win % with its Wilson 95% interval\n\
-         {:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>11} {:>20}\n",
+         {:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>11} {:>20} {:>22} {:>15}\n",
         if first_match > 0 {
             format!(
                 " (numbers {first_match} to {} of the evaluation)",
@@ -598,11 +626,13 @@ pub fn format_table(rows: &[TeamSummary], matches: usize, first_match: usize) ->
         "passes >= 1 m",
         "average shots",
         "W/D/L",
-        "win %"
+        "win %",
+        "open-play goals for/ag",
+        "restart goals"
     );
     for r in rows {
         s.push_str(&format!(
-            "{:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>11} {:>20}\n",
+            "{:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>11} {:>20} {:>22} {:>15}\n",
             r.name,
             format!("{:.2}", r.goals),
             format!("{:.1}", r.control_rate),
@@ -611,6 +641,11 @@ pub fn format_table(rows: &[TeamSummary], matches: usize, first_match: usize) ->
             format!("{:.2}", r.shots),
             format!("{}/{}/{}", r.wins, r.draws, r.losses),
             r.win_rate.to_string(),
+            format!(
+                "{:.2} / {:.2}",
+                r.goals_open_play.mean, r.goals_open_play_against.mean
+            ),
+            format!("{:.2}", r.goals_restart.mean),
         ));
     }
     if both {
@@ -762,6 +797,9 @@ impl EvalReport {
             json!({
                 "name": r.name, "goals": est(&r.goals), "control_rate_percent": est(&r.control_rate),
                 "passes": est(&r.passes), "long_passes": est(&r.long_passes), "shots": est(&r.shots),
+                "goals_open_play": est(&r.goals_open_play), "goals_restart": est(&r.goals_restart),
+                "goals_own_goal": est(&r.goals_own_goal), "goals_disallowed": est(&r.goals_disallowed),
+                "goals_open_play_against": est(&r.goals_open_play_against),
                 "wins": r.wins, "draws": r.draws, "losses": r.losses,
                 "win_rate": rate(&r.win_rate), "as_blue": rec(&r.as_blue), "as_red": rec(&r.as_red),
             })

@@ -13,6 +13,7 @@
 pub mod frame;
 #[cfg(feature = "tokio")]
 pub mod framed;
+mod head;
 pub mod msg;
 pub mod types;
 

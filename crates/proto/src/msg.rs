@@ -12,6 +12,7 @@
 //! unknown `type` deserialises to the `Unknown` variant so that the receiver
 //! can answer it (server) or skip it (client) instead of failing.
 
+use crate::head::Member;
 use crate::types::{Action, Event, MatchStats, Observation, Team, Tick, PLAYERS_PER_TEAM};
 // Defined beside the other ids and per-team types; named here too, where
 // the messages that carry them are.
@@ -24,7 +25,7 @@ pub const PROTOCOL_NAME: &str = "naosoccer";
 
 /// This build's protocol version. Peers must agree on `major`; a higher
 /// `minor` only adds optional fields and message types.
-pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 3 };
+pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 4 };
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Version {
@@ -221,12 +222,21 @@ pub struct FrameHead {
 
 impl FrameHead {
     /// Reads the head of a payload leniently: other fields may be missing
-    /// or ill-typed. For error paths only (it builds a JSON tree).
+    /// or ill-typed, and nested deeper than serde_json parses (the frame is
+    /// read without recursion, in time linear in its length). For error
+    /// paths only.
     pub fn peek(payload: &[u8]) -> FrameHead {
-        let Ok(serde_json::Value::Object(map)) = serde_json::from_slice(payload) else {
+        let Some(top) = crate::head::top_level(payload) else {
             return FrameHead::default();
         };
-        let Some(kind) = map.get("type").and_then(|t| t.as_str()) else {
+        fn scalar(m: Option<Member<'_>>) -> Option<&[u8]> {
+            match m {
+                Some(Member::Scalar(text)) => Some(text),
+                _ => None,
+            }
+        }
+        let Some(kind) = scalar(top.ty).and_then(|t| serde_json::from_slice::<String>(t).ok())
+        else {
             return FrameHead::default();
         };
         let kind = ClientMsg::KINDS
@@ -235,7 +245,10 @@ impl FrameHead {
             .find(|k| *k == kind)
             .unwrap_or("unknown");
         let tick = (kind == "action")
-            .then(|| map.get("tick").and_then(|t| t.as_u64()).map(Tick::new))
+            .then(|| {
+                let t = serde_json::from_slice::<serde_json::Value>(scalar(top.tick)?).ok()?;
+                t.as_u64().map(Tick::new)
+            })
             .flatten();
         FrameHead {
             kind: Some(kind),
@@ -1034,6 +1047,30 @@ mod tests {
                 head.tick,
                 matches!(msg, ClientMsg::Action(_)).then_some(Tick::new(9))
             );
+        }
+    }
+
+    /// docs/PROTOCOL.md, section 1: 127 levels of nesting decode (unknown
+    /// fields are ignored), 128 are refused; the error names the `type`
+    /// however deep the frame (issue 39).
+    #[test]
+    fn nesting_past_127_levels_is_refused_with_its_type() {
+        let nested = |levels: usize| {
+            let inner = levels - 1; // the message's own object is one
+            format!(
+                r#"{{"type":"ping","nonce":4,"x":{}{}}}"#,
+                "[".repeat(inner),
+                "]".repeat(inner)
+            )
+        };
+        let ok = ClientMsg::decode(nested(127).as_bytes()).unwrap();
+        assert_eq!(ok, ClientMsg::Ping(Ping { nonce: 4 }));
+        for levels in [128, 30_000] {
+            let e = ClientMsg::decode(nested(levels).as_bytes())
+                .unwrap_err()
+                .to_error();
+            assert_eq!(e.code, ErrorCode::InvalidArgument);
+            assert_eq!(e.in_reply_to.as_deref(), Some("ping"), "{levels} levels");
         }
     }
 

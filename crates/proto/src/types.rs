@@ -466,6 +466,51 @@ impl SetPlayKind {
     }
 }
 
+/// How a goal came about (protocol 1.4), from the touches of the ball
+/// since the last restart.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GoalPhase {
+    /// Anything that is not one of the two below.
+    OpenPlay,
+    /// From the scoring team's own restart (its kick-off or set play): only
+    /// that team's robots touched the ball since the restart was awarded,
+    /// and the goal came within `restart_goal_seconds` (15 s) of it.
+    Restart,
+    /// A robot of the conceding team touched the ball last.
+    OwnGoal,
+}
+
+impl GoalPhase {
+    pub const ALL: [GoalPhase; 3] = [GoalPhase::OpenPlay, GoalPhase::Restart, GoalPhase::OwnGoal];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            GoalPhase::OpenPlay => "open_play",
+            GoalPhase::Restart => "restart",
+            GoalPhase::OwnGoal => "own_goal",
+        }
+    }
+}
+
+/// Why a goal did not count (protocol 1.4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DisallowReason {
+    /// Scored by the kicking team straight from its kick-off: no robot but
+    /// the kicker had touched the ball since the kick-off (the SPL rule
+    /// until 2022; `rules.direct_kick_off_goals` turns it off).
+    DirectKickOff,
+}
+
+impl DisallowReason {
+    pub fn name(self) -> &'static str {
+        match self {
+            DisallowReason::DirectKickOff => "direct_kick_off",
+        }
+    }
+}
+
 /// A set play as a player sees it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SetPlayObs {
@@ -544,11 +589,24 @@ pub fn pass_receiver(obs: &Observation) -> Option<usize> {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Event {
-    /// A goal for `team` (scored into the other team's goal).
+    /// A goal for `team` (scored into the other team's goal). `scorer` is
+    /// the robot of `team` that touched the ball last, `None` for an own
+    /// goal (or a ball nobody touched).
     Goal {
         tick: Tick,
         team: Team,
         scorer: Option<RobotId>,
+        /// How the goal came about (protocol 1.4; `None` from older peers).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        phase: Option<GoalPhase>,
+    },
+    /// The ball went into the goal but the goal does not count; play
+    /// restarts with the set play that follows (a `SetPlay` event names
+    /// it). `team` is the team it would have counted for. Protocol 1.4.
+    GoalDisallowed {
+        tick: Tick,
+        team: Team,
+        reason: DisallowReason,
     },
     /// A kick that moved the ball.
     Kick {
@@ -624,6 +682,7 @@ impl Event {
     pub fn tick(&self) -> Option<Tick> {
         Some(match self {
             Event::Goal { tick, .. }
+            | Event::GoalDisallowed { tick, .. }
             | Event::Kick { tick, .. }
             | Event::Pass { tick, .. }
             | Event::Fall { tick, .. }
@@ -658,6 +717,18 @@ pub struct TeamStats {
     pub goal_kicks: u32,
     #[serde(default)]
     pub corner_kicks: u32,
+    /// This team's goals by phase (protocol 1.4; 0 from older peers):
+    /// from open play, from its own restarts, and the other team's own
+    /// goals. The three sum to `goals`.
+    #[serde(default)]
+    pub goals_open_play: u32,
+    #[serde(default)]
+    pub goals_restart: u32,
+    #[serde(default)]
+    pub goals_own_goal: u32,
+    /// Goals of this team that did not count (protocol 1.4).
+    #[serde(default)]
+    pub goals_disallowed: u32,
 }
 
 /// Goals per team, in world terms (not mirrored).

@@ -76,6 +76,16 @@ pub struct RulesConfig {
     /// placed on its front corner on the side where the ball left.
     pub goal_area_depth: f32,
     pub goal_area_width: f32,
+    /// Whether a goal scored straight from a kick-off counts. `false` (the
+    /// SPL rule until 2022): after the kick-off, a goal by the kicking team
+    /// counts only once a robot other than the kicker has touched the ball;
+    /// before that it is disallowed and play restarts with a goal kick for
+    /// the other team. `true`: every goal counts (before protocol 1.4).
+    pub direct_kick_off_goals: bool,
+    /// Goals by phase: a goal counts as from the scoring team's restart when
+    /// it comes at most this many seconds after the restart was awarded
+    /// (and only that team touched the ball since).
+    pub restart_goal_seconds: f32,
 }
 
 /// Who kicks off the first half.
@@ -116,6 +126,8 @@ impl Default for RulesConfig {
             set_play_seconds: 15.0,
             goal_area_depth: 0.6,
             goal_area_width: 3.4,
+            direct_kick_off_goals: false,
+            restart_goal_seconds: 15.0,
         }
     }
 }
@@ -365,6 +377,7 @@ impl MatchConfig {
         }
         non_negative("rules.set_play_distance", r.set_play_distance)?;
         non_negative("rules.set_play_seconds", r.set_play_seconds)?;
+        non_negative("rules.restart_goal_seconds", r.restart_goal_seconds)?;
         positive("rules.goal_area_depth", r.goal_area_depth)?;
         positive("rules.goal_area_width", r.goal_area_width)?;
         let (hl, hw) = (self.sim.field_length / 2.0, self.sim.field_width / 2.0);

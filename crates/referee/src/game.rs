@@ -3,16 +3,16 @@
 
 use naosoccer_proto::msg::{Frame, Pitch};
 use naosoccer_proto::{
-    Action, Event, MatchStats, Observation, RobotId, Score, SetPlayKind, SetPlayObs, Team, Tick,
-    PLAYERS_PER_TEAM, ROBOTS,
+    Action, Event, GoalPhase, MatchStats, Observation, RobotId, Score, SetPlayKind, SetPlayObs,
+    Team, Tick, PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_sim::{Command as SimCommand, RobotModel, Sim, SimError, StateHasher};
 
 use crate::config::{ConfigError, MatchConfig, RewardConfig};
 use crate::observe::{self, ObsContext};
 use crate::rules::{
-    segment_distance, Clock, Command, FallRule, Field, GoalRule, KickOff, OutOfBoundsRule, Outcome,
-    PassMade, PassRule, PossessionRule, SetPlayRule,
+    goal::Scored, segment_distance, Clock, Command, FallRule, Field, GoalRule, KickOff,
+    OutOfBoundsRule, Outcome, PassMade, PassRule, PossessionRule, RestartRule, SetPlayRule,
 };
 
 /// Why a match could not be set up.
@@ -40,6 +40,7 @@ pub struct Match {
     possession: PossessionRule,
     pass: PassRule,
     set_play: SetPlayRule,
+    restart: RestartRule,
     /// Control ticks played.
     tick: Tick,
     finished: bool,
@@ -75,7 +76,7 @@ impl Match {
             steps_per_tick,
             clock: Clock::new(cfg.minutes, cfg.control_hz, r.halves),
             kickoff: KickOff::new(r, KickOff::first_team(r.first_kickoff, seed)),
-            goal: GoalRule::new(field),
+            goal: GoalRule::new(field, r.goal_area_depth, r.goal_area_width),
             out_of_bounds: OutOfBoundsRule::new(
                 field,
                 r.ball_inset,
@@ -89,6 +90,10 @@ impl Match {
             set_play: SetPlayRule::new(
                 r.set_play_distance,
                 (f64::from(r.set_play_seconds) * f64::from(cfg.control_hz)).round() as u64,
+            ),
+            restart: RestartRule::new(
+                !r.direct_kick_off_goals,
+                (f64::from(r.restart_goal_seconds) * f64::from(cfg.control_hz)).round() as u64,
             ),
             tick: Tick::ZERO,
             finished: false,
@@ -154,9 +159,14 @@ impl Match {
         // A step of `forward` covers about walk_speed / control_hz: the
         // keep-out margin, so a robot on the edge cannot step inside.
         let step_margin = self.cfg.sim.walk_speed * 1.2 / self.cfg.control_hz;
+        let kept_out = self.set_play.active().map(|a| a.team.other());
         for (i, &a) in actions.iter().enumerate() {
             let snap = &self.sim.snapshot().robots[i];
+            let robot_team = RobotId::from_index(i).map(RobotId::team);
             let cmd = if self.fall.is_down(i) {
+                SimCommand::Stay
+            } else if matches!(a, Action::Shoot | Action::Pass) && robot_team == kept_out {
+                // Set play: the other team may not kick.
                 SimCommand::Stay
             } else if a == Action::Forward
                 && RobotId::from_index(i).is_some_and(|robot| {
@@ -189,6 +199,7 @@ impl Match {
             self.sim.set_command(i, cmd);
         }
         let potential_before = self.potentials();
+        let first_step = self.sim.snapshot().step;
         let mut aimed = [false; ROBOTS];
         for _ in 0..self.steps_per_tick {
             self.sim.step();
@@ -237,8 +248,16 @@ impl Match {
         if self.cfg.reward.ahead > 0.0 {
             self.pay_ahead();
         }
+        // The robots that touched the ball during the tick's physics steps.
+        let touched: [bool; ROBOTS] = std::array::from_fn(|i| {
+            self.sim.snapshot().robots[i]
+                .last_ball_touch_step
+                .is_some_and(|s| s > first_step)
+        });
+        self.restart.touches(&touched);
         self.run_rules(tick);
         self.apply_commands(tick);
+        self.keep_out(tick);
         for e in &self.outcome.events {
             apply_stats(&mut self.stats, e);
         }
@@ -343,14 +362,14 @@ impl Match {
     fn run_rules(&mut self, tick: Tick) {
         let snap = self.sim.snapshot();
         let out = &mut self.outcome;
-        let scored = self.goal.check(snap, tick, out);
-        if let Some(team) = scored {
+        let scored = self.goal.check(snap, tick, &self.restart, out);
+        if let Some(Scored::Goal(team)) = scored {
             *self.score.get_mut(team) += 1;
             self.last_goal = Some(team);
         }
         let ball_replaced =
             scored.is_some() || self.out_of_bounds.check_ball(snap, tick, out).is_some();
-        if scored.is_none() {
+        if !matches!(scored, Some(Scored::Goal(_))) {
             // After a goal every robot goes to its kick-off place anyway.
             self.out_of_bounds
                 .check_robots(snap, &self.kickoff, tick, out);
@@ -389,12 +408,17 @@ impl Match {
         for i in 0..self.outcome.commands.len() {
             match self.outcome.commands[i] {
                 Command::SetPlay { kind, team, x, y } => {
-                    self.sim.place_ball(x, y);
-                    let b = self.sim.snapshot().ball.pos;
-                    let spot = (b[0], b[1]);
-                    self.set_play.award(kind, team, spot, tick.next());
-                    SetPlayRule::event(tick, kind, team, spot, &mut self.outcome);
-                    self.push_out_of_the_circle();
+                    // The ball goes on its spot; robots standing there step aside.
+                    let moved = self.sim.place_ball_exact(x, y);
+                    for (i, robot) in RobotId::all().enumerate() {
+                        if moved[i] && self.fall.is_down(i) {
+                            self.fall.clear_robot(i);
+                            self.outcome.events.push(Event::GetUp { tick, robot });
+                        }
+                    }
+                    self.set_play.award(kind, team, (x, y), tick.next());
+                    self.restart.set_play(team, tick.next());
+                    SetPlayRule::event(tick, kind, team, (x, y), &mut self.outcome);
                     self.pass.reset();
                     self.controller = None;
                 }
@@ -428,18 +452,28 @@ impl Match {
         }
     }
 
-    /// Robots of the team not taking the set play that stand inside the
-    /// keep-out circle go straight out to its edge (lying ones stay: they
-    /// cannot act, and get up where they lie).
-    fn push_out_of_the_circle(&mut self) {
+    /// While a set play lasts (from the tick it is awarded on), robots of
+    /// the team not taking it that are inside the keep-out circle at the
+    /// end of a tick (there at the award, pushed in, or fallen in) go
+    /// straight out to the free spot nearest its edge, upright: every
+    /// observation during a set play has them at least `set_play_distance`
+    /// from the ball's spot.
+    fn keep_out(&mut self, tick: Tick) {
+        let Some(active) = self.set_play.active().copied() else {
+            return;
+        };
+        let radius = self.set_play.distance();
         for robot in RobotId::all() {
             let i = robot.index();
-            if self.fall.is_down(i) {
-                continue;
-            }
             let r = self.sim.snapshot().robots[i];
-            if let Some((x, y)) = self.set_play.push_out(robot.team(), r.pos[0], r.pos[1]) {
-                self.sim.place_robot(i, x, y, r.heading);
+            let Some(target) = self.set_play.push_out(robot.team(), r.pos[0], r.pos[1]) else {
+                continue;
+            };
+            self.sim
+                .place_robot_outside(i, target, r.heading, active.spot, radius);
+            if self.fall.is_down(i) {
+                self.fall.clear_robot(i);
+                self.outcome.events.push(Event::GetUp { tick, robot });
             }
         }
     }
@@ -456,6 +490,7 @@ impl Match {
         self.controller = None;
         self.set_play
             .award(SetPlayKind::KickOff, team, (0.0, 0.0), first_tick);
+        self.restart.kick_off(team, first_tick);
     }
 
     /// What `player` (0..=3; panics otherwise) of `team` sees now, in its
@@ -559,6 +594,7 @@ impl Match {
         }
         h.u64(self.pass.fingerprint());
         h.u64(self.set_play.fingerprint());
+        h.u64(self.restart.fingerprint());
         h.u64(self.kickoff.first().index() as u64);
         h.finish()
     }
@@ -588,9 +624,11 @@ impl Match {
 
     /// For staged situations (training drills, tests) placed with
     /// [`Match::sim_mut`]: forgets the set play in progress (at the start,
-    /// the first kick-off), so nobody is held back from the staged ball.
+    /// the first kick-off), so nobody is held back from the staged ball, and
+    /// the restart it was (no kick-off rule, no goal from a restart).
     pub fn clear_set_play(&mut self) {
         self.set_play.clear();
+        self.restart.clear();
     }
 
     /// Who controls the ball (the paper's `if_c`), as of the last tick.
@@ -767,7 +805,16 @@ fn sim_command(a: Action) -> SimCommand {
 /// Statistics follow from the event stream alone.
 fn apply_stats(stats: &mut MatchStats, e: &Event) {
     match *e {
-        Event::Goal { team, .. } => stats.team_mut(team).goals += 1,
+        Event::Goal { team, phase, .. } => {
+            let t = stats.team_mut(team);
+            t.goals += 1;
+            match phase {
+                Some(GoalPhase::Restart) => t.goals_restart += 1,
+                Some(GoalPhase::OwnGoal) => t.goals_own_goal += 1,
+                Some(GoalPhase::OpenPlay) | None => t.goals_open_play += 1,
+            }
+        }
+        Event::GoalDisallowed { team, .. } => stats.team_mut(team).goals_disallowed += 1,
         Event::Kick { robot, .. } => stats.team_mut(robot.team()).shots += 1,
         Event::Pass { from, .. } => stats.team_mut(from.team()).passes += 1,
         Event::Fall { robot, .. } => stats.team_mut(robot.team()).falls += 1,

@@ -818,6 +818,9 @@ fn issue_13_shaping_telescopes_between_restarts() {
             actions[i] = p.act(&m.observe(r.team(), r.player()));
         }
         let mut physics = [0.0f64; ROBOTS];
+        // During a set play the other team is kept out of the circle: moved
+        // out without an event of its own.
+        let set_play = m.set_play().is_some();
         let events = m
             .step_observed(&actions, |sim| physics = potential(sim.snapshot()))
             .to_vec();
@@ -830,18 +833,19 @@ fn issue_13_shaping_telescopes_between_restarts() {
                 )
             })
             .count();
-        let placed = events.iter().any(|e| {
-            matches!(
-                e,
-                Event::Goal { .. }
-                    | Event::BallOut { .. }
-                    | Event::HalfTime { .. }
-                    | Event::RobotOut { .. }
-                    | Event::GetUp { .. }
-                    | Event::SetPlay { .. }
-                    | Event::KickOff { .. }
-            )
-        });
+        let placed = set_play
+            || events.iter().any(|e| {
+                matches!(
+                    e,
+                    Event::Goal { .. }
+                        | Event::BallOut { .. }
+                        | Event::HalfTime { .. }
+                        | Event::RobotOut { .. }
+                        | Event::GetUp { .. }
+                        | Event::SetPlay { .. }
+                        | Event::KickOff { .. }
+                )
+            });
         let after = potential(m.sim().snapshot());
         for i in 0..ROBOTS {
             let jump = after[i] - physics[i];

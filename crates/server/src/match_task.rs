@@ -16,6 +16,7 @@ mod info;
 
 use crate::match_msg::{send_observation, ConnEntry, ConnId, MatchCmd};
 use crate::observer::{MatchObserver, TickRecord};
+use crate::shared::Listing;
 use naosoccer_client::policy::ScriptedParams;
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Fill, MatchId, MatchInfo, MatchState, Mode};
@@ -70,7 +71,7 @@ pub(crate) struct MatchTask {
     /// The tick whose observation went out last (actions may name it or older).
     observed: Option<Tick>,
     rx: mpsc::Receiver<MatchCmd>,
-    info: watch::Sender<MatchInfo>,
+    listing: Listing,
     shutdown: watch::Receiver<bool>,
     observer: Option<Box<dyn MatchObserver>>,
     obs_scratch: Observation,
@@ -97,7 +98,7 @@ impl MatchTask {
         params: MatchParams,
         game: Match,
         rx: mpsc::Receiver<MatchCmd>,
-        info: watch::Sender<MatchInfo>,
+        listing: Listing,
         shutdown: watch::Receiver<bool>,
         observer: Option<Box<dyn MatchObserver>>,
         custom_fill: Option<Vec<Box<dyn Policy>>>,
@@ -129,7 +130,7 @@ impl MatchTask {
             misses: [0; ROBOTS],
             observed: None,
             rx,
-            info,
+            listing,
             shutdown,
             observer,
             obs_scratch,
@@ -151,10 +152,12 @@ impl MatchTask {
         if let Err(stop) = self.serve(None, |t| t.joined_robots() < start).await {
             return stop;
         }
-        self.info.send_modify(|i| i.state = MatchState::Running);
+        self.listing
+            .info
+            .send_modify(|i| i.state = MatchState::Running);
         tracing::info!(match_id = %self.params.id, "match started");
         if let Some(o) = &mut self.observer {
-            o.on_start(&self.info.borrow(), &self.game);
+            o.on_start(&self.listing.info.borrow(), &self.game);
         }
         match self.params.mode {
             Mode::Lockstep => self.lockstep().await,
@@ -337,7 +340,7 @@ impl MatchTask {
         }
         let score = self.game.score();
         let now = self.game.tick();
-        self.info.send_modify(|i| {
+        self.listing.info.send_modify(|i| {
             i.tick = now;
             i.score = score;
         });

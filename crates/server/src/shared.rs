@@ -11,14 +11,15 @@ use naosoccer_proto::msg::{
 };
 use naosoccer_proto::Team;
 use naosoccer_referee::{Match, MatchError};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::net::IpAddr;
 use std::sync::atomic::AtomicU64;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 use tokio::sync::{mpsc, watch};
 
-/// Finished matches kept for `list_matches`; older ones are forgotten.
+/// Finished matches kept for `list_matches`: the most recently finished;
+/// the others are forgotten (docs/PROTOCOL.md, `match_list`).
 const KEEP_FINISHED: usize = 64;
 /// Commands queued to one match task.
 const MATCH_QUEUE: usize = 256;
@@ -33,7 +34,8 @@ pub(crate) struct Shared {
     pub(crate) config: ServerConfig,
     pub(crate) tokens: Tokens,
     hooks: Hooks,
-    matches: Mutex<Registry>,
+    /// Shared with every match task, which records its own end in it.
+    matches: Arc<Mutex<Registry>>,
     shutdown: watch::Receiver<bool>,
     /// Each task holds a clone; `run` waits for all of them to drop.
     done: mpsc::Sender<()>,
@@ -73,7 +75,7 @@ impl Shared {
             config,
             tokens,
             hooks,
-            matches: Mutex::new(Registry::default()),
+            matches: Arc::new(Mutex::new(Registry::default())),
             shutdown,
             done,
             next_conn: AtomicU64::new(1),
@@ -100,6 +102,8 @@ impl Shared {
 struct Registry {
     next_id: u64,
     matches: BTreeMap<MatchId, MatchEntry>,
+    /// The finished matches still in `matches`, in the order they finished.
+    finished: VecDeque<MatchId>,
     /// Matches whose id is taken but whose world is still being built
     /// (outside the lock); they count towards `max_matches`.
     starting: usize,
@@ -186,6 +190,11 @@ impl Shared {
         };
         let info = MatchTask::initial_info(&params, &game);
         let (info_tx, info_rx) = watch::channel(info.clone());
+        let listing = Listing {
+            info: info_tx,
+            registry: self.matches.clone(),
+            id,
+        };
         let (tx, rx) = mpsc::channel(MATCH_QUEUE);
         let hook = self.hooks.observer.as_ref().and_then(|f| f(&info));
         let observer = crate::recording::observer_for(&self.config, hook, &info);
@@ -198,26 +207,29 @@ impl Shared {
             params,
             game,
             rx,
-            info_tx,
+            listing,
             self.shutdown.clone(),
             observer,
             fillers,
         );
+        {
+            // Listed before its task runs: a match that ends at once is
+            // then in the registry when it records its end there.
+            let mut reg = self.registry();
+            reg.starting -= 1;
+            reg.matches.insert(id, MatchEntry { tx, info: info_rx });
+        }
         let done = self.done.clone();
         tokio::spawn(async move {
             task.run().await;
             drop(done);
         });
-        let mut reg = self.registry();
-        reg.starting -= 1;
-        reg.matches.insert(id, MatchEntry { tx, info: info_rx });
-        prune_finished(&mut reg);
         Ok(info)
     }
 
     /// The registry, for moments: nothing slow runs while it is locked.
-    fn registry(&self) -> std::sync::MutexGuard<'_, Registry> {
-        self.matches.lock().expect("registry lock poisoned")
+    fn registry(&self) -> MutexGuard<'_, Registry> {
+        lock(&self.matches)
     }
 
     pub(crate) fn list_matches(&self) -> Vec<MatchInfo> {
@@ -287,17 +299,32 @@ fn invalid(message: String) -> CreateError {
     CreateError::Refused(ErrorMsg::new(ErrorCode::InvalidArgument, message))
 }
 
-fn prune_finished(reg: &mut Registry) {
-    let finished: Vec<MatchId> = reg
-        .matches
-        .iter()
-        .filter(|(_, e)| e.info.borrow().state == MatchState::Finished)
-        .map(|(id, _)| *id)
-        .collect();
-    for id in finished
-        .iter()
-        .take(finished.len().saturating_sub(KEEP_FINISHED))
-    {
-        reg.matches.remove(id);
+fn lock(registry: &Mutex<Registry>) -> MutexGuard<'_, Registry> {
+    registry.lock().expect("registry lock poisoned")
+}
+
+/// A match task's link to the registry: the [`MatchInfo`] it publishes
+/// (`list_matches` reads it), and where its end is recorded.
+pub(crate) struct Listing {
+    pub(crate) info: watch::Sender<MatchInfo>,
+    registry: Arc<Mutex<Registry>>,
+    id: MatchId,
+}
+
+impl Listing {
+    /// Publishes the match as finished with `publish`, and forgets the
+    /// finished matches beyond the `KEEP_FINISHED` most recently finished,
+    /// under one lock of the registry: no `list_matches` or `join` ever
+    /// sees more of them. (Issue 39: they were forgotten only at the next
+    /// `create_match`, so the list held 65 until then.)
+    pub(crate) fn finish(&self, publish: impl FnOnce(&mut MatchInfo)) {
+        let mut reg = lock(&self.registry);
+        self.info.send_modify(publish);
+        reg.finished.push_back(self.id);
+        while reg.finished.len() > KEEP_FINISHED {
+            if let Some(old) = reg.finished.pop_front() {
+                reg.matches.remove(&old);
+            }
+        }
     }
 }

@@ -44,14 +44,17 @@ impl Area {
 
 /// The nearest spot to `(x, y)` (clamped into `area`) where `mover`, posed
 /// by `pose_at(x, y)`, keeps `CLEARANCE` from every body in `blockers` and
-/// every collider in `fixed` (goals). Falls back to the clamped spot if no
-/// candidate in the area is clear (a pitch full of bodies; never seen).
+/// every collider in `fixed` (goals), among the spots `allowed` accepts.
+/// Falls back to the clamped spot if no candidate in the area is clear (a
+/// pitch full of bodies; never seen).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn free_spot(
     world: &PhysicsWorld,
     mover: RigidBodyHandle,
     pose_at: impl Fn(f32, f32) -> Pose,
     (x, y): (f32, f32),
     area: Area,
+    allowed: impl Fn(f32, f32) -> bool,
     blockers: &[RigidBodyHandle],
     fixed: &[ColliderHandle],
 ) -> (f32, f32) {
@@ -68,7 +71,7 @@ pub(crate) fn free_spot(
             CLEARANCE,
         )
     };
-    if clear(x, y) {
+    if allowed(x, y) && clear(x, y) {
         return (x, y);
     }
     let rings = (2.0 * (area.half_x + area.half_y) / RING_STEP).ceil() as u32;
@@ -78,7 +81,7 @@ pub(crate) fn free_spot(
         for j in 0..n {
             let a = std::f32::consts::TAU * j as f32 / n as f32;
             let (cx, cy) = (x + r * a.cos(), y + r * a.sin());
-            if area.contains(cx, cy) && clear(cx, cy) {
+            if area.contains(cx, cy) && allowed(cx, cy) && clear(cx, cy) {
                 return (cx, cy);
             }
         }

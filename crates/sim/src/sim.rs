@@ -7,7 +7,7 @@ use rapier3d::math::{Pose, Rot3, Vec3};
 use rapier3d::prelude::{ColliderHandle, PhysicsWorld, RigidBody, RigidBodyHandle};
 
 use crate::hash::StateHasher;
-use crate::place::{free_spot, Area};
+use crate::place::{body_reach, free_spot, is_clear, Area, CLEARANCE};
 use crate::world::{
     build, default_robot_spot, set_sole_friction, standing_pose, tilt_of, ROBOT_TAG,
 };
@@ -349,14 +349,65 @@ impl Sim {
     /// and returns the spot used; clears a fall, a stumble and any kick in
     /// progress.
     pub fn place_robot(&mut self, robot: usize, x: f32, y: f32, heading: f32) -> (f32, f32) {
-        let mut blockers = [self.ball; ROBOTS];
-        for (j, b) in blockers.iter_mut().skip(1).enumerate() {
-            *b = self.robots[if j < robot { j } else { j + 1 }];
-        }
+        let blockers = self.others_than(robot);
         let spot = self.robot_spot(robot, (x, y), heading, &blockers);
         self.put_robot(robot, spot, heading);
         self.refresh_snapshot();
         spot
+    }
+
+    /// [`Sim::place_robot`], but only onto spots whose centre is at least
+    /// `radius` from `centre` (a set play's keep-out circle): the free spot
+    /// outside the circle nearest `(x, y)`, within the field lines plus half
+    /// the ground margin.
+    pub fn place_robot_outside(
+        &mut self,
+        robot: usize,
+        (x, y): (f32, f32),
+        heading: f32,
+        centre: (f32, f32),
+        radius: f32,
+    ) -> (f32, f32) {
+        let blockers = self.others_than(robot);
+        let outside = |cx: f32, cy: f32| (cx - centre.0).hypot(cy - centre.1) >= radius;
+        let spot = self.robot_spot_where(robot, (x, y), heading, &blockers, outside);
+        self.put_robot(robot, spot, heading);
+        self.refresh_snapshot();
+        spot
+    }
+
+    /// Puts the ball at rest on the ground exactly at `(x, y)` (a set
+    /// play's spot) and stands every robot whose colliders come within 2 cm
+    /// of it, standing or lying, upright at the free spot nearest where its
+    /// torso was (see [`Sim::place_all`] for "free"), keeping its heading.
+    /// Returns which robots were moved, by index.
+    pub fn place_ball_exact(&mut self, x: f32, y: f32) -> [bool; ROBOTS] {
+        self.put_ball((x, y));
+        let mut moved = [false; ROBOTS];
+        for (i, m) in moved.iter_mut().enumerate() {
+            let body = &self.world.bodies[self.robots[i]];
+            let pose = *body.position();
+            let reach = body_reach(&self.world, self.robots[i]);
+            if is_clear(
+                &self.world,
+                self.robots[i],
+                reach,
+                &pose,
+                &[self.ball],
+                &[],
+                CLEARANCE,
+            ) {
+                continue;
+            }
+            let t = pose.translation;
+            let heading = heading_of(&pose.rotation);
+            let blockers = self.others_than(i);
+            let spot = self.robot_spot(i, (t.x, t.y), heading, &blockers);
+            self.put_robot(i, spot, heading);
+            *m = true;
+        }
+        self.refresh_snapshot();
+        moved
     }
 
     /// Stands robot `robot` upright at rest where it lies (torso x, y),
@@ -412,6 +463,7 @@ impl Sim {
             |x, y| Pose::from_translation(Vec3::new(x, y, r)),
             at,
             area,
+            |_, _| true,
             blockers,
             &self.goal_colliders,
         )
@@ -424,6 +476,18 @@ impl Sim {
         heading: f32,
         blockers: &[RigidBodyHandle],
     ) -> (f32, f32) {
+        self.robot_spot_where(robot, at, heading, blockers, |_, _| true)
+    }
+
+    /// [`Sim::robot_spot`] among the spots `allowed` accepts.
+    fn robot_spot_where(
+        &self,
+        robot: usize,
+        at: (f32, f32),
+        heading: f32,
+        blockers: &[RigidBodyHandle],
+        allowed: impl Fn(f32, f32) -> bool,
+    ) -> (f32, f32) {
         let area = Area {
             half_x: (self.cfg.field_length + self.cfg.ground_margin) * 0.5,
             half_y: (self.cfg.field_width + self.cfg.ground_margin) * 0.5,
@@ -435,9 +499,19 @@ impl Sim {
             |x, y| standing_pose(h, x, y, heading),
             at,
             area,
+            allowed,
             blockers,
             &self.goal_colliders,
         )
+    }
+
+    /// Every body but robot `robot`: the blockers of its placement.
+    fn others_than(&self, robot: usize) -> [RigidBodyHandle; ROBOTS] {
+        let mut blockers = [self.ball; ROBOTS];
+        for (j, b) in blockers.iter_mut().skip(1).enumerate() {
+            *b = self.robots[if j < robot { j } else { j + 1 }];
+        }
+        blockers
     }
 
     fn put_ball(&mut self, (x, y): (f32, f32)) {

@@ -1,6 +1,6 @@
 //! The pitch as the rules see it, and the small geometry every rule shares.
 
-use naosoccer_proto::RobotId;
+use naosoccer_proto::{RobotId, Team};
 use naosoccer_sim::{SimConfig, Snapshot};
 
 /// The pitch as the rules see it, in world coordinates (centre spot at the
@@ -34,6 +34,24 @@ impl Field {
     pub fn contains(&self, x: f32, y: f32, margin: f32) -> bool {
         x.abs() <= self.half_length + margin && y.abs() <= self.half_width + margin
     }
+}
+
+/// A goal kick's spot, world frame: the front corner of `defenders`' goal
+/// area on the side of `y` (the side where the ball left; +y for 0).
+pub fn goal_kick_spot(
+    field: &Field,
+    goal_area_depth: f32,
+    goal_area_half_width: f32,
+    defenders: Team,
+    y: f32,
+) -> (f32, f32) {
+    // Blue defends -x.
+    let side_x = -defenders.direction();
+    let side_y = if y < 0.0 { -1.0 } else { 1.0 };
+    (
+        side_x * (field.half_length - goal_area_depth),
+        side_y * goal_area_half_width,
+    )
 }
 
 /// The distance from point `p` to the segment `a`-`b` (a point when the

@@ -15,6 +15,7 @@ pub mod out_of_bounds;
 pub mod outcome;
 pub mod pass;
 pub mod possession;
+pub mod restart;
 pub mod set_play;
 #[cfg(test)]
 pub(crate) mod testing;
@@ -29,4 +30,5 @@ pub use out_of_bounds::Restart;
 pub use outcome::{Command, Outcome};
 pub use pass::{PassMade, PassRule};
 pub use possession::PossessionRule;
+pub use restart::RestartRule;
 pub use set_play::{ActiveSetPlay, SetPlayRule};

@@ -20,7 +20,7 @@
 use naosoccer_proto::{Event, RobotId, SetPlayKind, Team, Tick};
 use naosoccer_sim::Snapshot;
 
-use super::field::{last_touch, Field};
+use super::field::{goal_kick_spot, last_touch, Field};
 use super::kickoff::KickOff;
 use super::outcome::{Command, Outcome};
 
@@ -97,11 +97,18 @@ impl OutOfBoundsRule {
                 y: side_y * (f.half_width - self.ball_inset),
             })
         } else {
+            let (x, y) = goal_kick_spot(
+                f,
+                self.goal_area_depth,
+                self.goal_area_half_width,
+                defenders,
+                y,
+            );
             Some(Restart {
                 kind: SetPlayKind::GoalKick,
                 team: defenders,
-                x: side_x * (f.half_length - self.goal_area_depth),
-                y: side_y * self.goal_area_half_width,
+                x,
+                y,
             })
         }
     }

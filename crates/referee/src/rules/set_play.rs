@@ -1,9 +1,11 @@
 //! Set plays (SPL): after a kick-off, kick-in, goal kick or corner kick is
 //! awarded, the team that does not take it keeps `distance` from the ball
 //! until the ball is played (it has moved from its spot) or `timeout_ticks`
-//! have passed. Robots of that team already inside the circle when it is
-//! awarded are moved out to its edge; during the set play their steps toward
-//! the ball are refused (they may turn, stand or walk away).
+//! have passed. The driver ([`crate::Match`]) enforces it: robots of that
+//! team inside the circle at the end of any tick are moved out to its edge
+//! ([`SetPlayRule::push_out`]), their steps toward the ball are refused
+//! ([`SetPlayRule::blocks_forward`]; they may turn, stand or walk away) and
+//! so are their kicks.
 //!
 //! Tie-breaks, written down: the ball counts as played once its centre is
 //! more than [`SetPlayRule::PLAYED`] from its spot (a kick that moves it, a
@@ -116,9 +118,10 @@ impl SetPlayRule {
         d < self.distance + margin && dx * heading.cos() + dy * heading.sin() > 0.0
     }
 
-    /// Where a robot of the other team standing at (x, y) inside the circle
-    /// must go: straight out from the ball to the circle's edge (plus a
-    /// hair). `None` when it is outside already.
+    /// Where a robot of the other team at (x, y) inside the circle must
+    /// go: straight out from the ball to the circle's edge (plus 2 cm).
+    /// `None` when it is outside already. (The driver then takes the free
+    /// spot outside the circle nearest this point, on the pitch.)
     pub fn push_out(&self, team: Team, x: f32, y: f32) -> Option<(f32, f32)> {
         let a = self.active?;
         if team == a.team {

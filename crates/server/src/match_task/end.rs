@@ -65,7 +65,7 @@ impl MatchTask {
         }
         // Finished before anyone hears of it, so a client that lists matches
         // right after its match_end sees it finished.
-        self.info.send_modify(|i| {
+        self.listing.finish(|i| {
             i.state = MatchState::Finished;
             i.taken = PerTeam::default();
         });
@@ -73,7 +73,7 @@ impl MatchTask {
             deliver(&c.out, Outgoing::MatchEnd(end.clone()));
         }
         if let Some(reply) = self.ended_by.take() {
-            let _ = reply.send(self.info.borrow().clone());
+            let _ = reply.send(self.listing.info.borrow().clone());
         }
     }
 

@@ -37,6 +37,6 @@ impl MatchTask {
         for r in RobotId::all() {
             taken.get_mut(r.team())[r.player()] = matches!(self.slots[r.index()], Slot::Client(_));
         }
-        self.info.send_modify(|i| i.taken = taken);
+        self.listing.info.send_modify(|i| i.taken = taken);
     }
 }
