@@ -470,10 +470,14 @@ pub fn check_team_list(teams: &[String]) -> Result<(), LeagueError> {
     check_teams(teams)
 }
 
-/// The goals by phase of the first team (`k` = 0) or the second of a match.
+/// The goals by phase of the first team (`k` = 0) or the second of a match
+/// (0 in reports written before the referee counted them).
 fn phase_goals(r: &MatchRecord, k: usize) -> PhaseGoals {
-    let _ = (r, k);
-    PhaseGoals::default()
+    PhaseGoals {
+        open_play: u64::from(r.goals_open_play[k]),
+        restart: u64::from(r.goals_restart[k]),
+        own_goal: u64::from(r.goals_own_goal[k]),
+    }
 }
 
 fn signed(x: f64) -> String {

@@ -83,6 +83,15 @@ pub struct ScriptedParams {
     /// `(tick + i) % react_ticks == 0`) and repeats its last action in
     /// between. 1: every tick (off).
     pub react_ticks: f32,
+    /// With `react_ticks` above 1: whether a turn is held like the other
+    /// actions (1), or a turning player decides again every tick (0).
+    pub hold_turns: f32,
+    /// Passing: at 1, a player at the ball passes with `pass` (the
+    /// protocol's kick toward the teammate [`naosoccer_proto::pass_receiver`]
+    /// names) whenever that teammate stands ahead of the ball, instead of
+    /// kicking straight ahead when a teammate is in its line of fire
+    /// (`pass_range`, `pass_cone`). 0: off.
+    pub aimed_pass: f32,
     /// Aim: a shot aims this far (m) from the goal centre toward the post
     /// farther from the opponents' keeper, and the angle condition is taken
     /// against that point. 0: the centre (off).
@@ -163,6 +172,8 @@ impl Default for ScriptedParams {
             cover_behind: 1.2,
             cover_max_x: 1.0,
             react_ticks: 1.0,
+            hold_turns: 1.0,
+            aimed_pass: 0.0,
             aim_offset: 0.0,
             keeper_guard: 0.0,
             markers: 0.0,
@@ -230,17 +241,19 @@ impl ScriptedParams {
     /// make no sense (see [`ScriptedParams::validate`]) are errors that say
     /// which.
     pub fn parse_spec(spec: &str) -> Result<ScriptedParams, String> {
-        let (head, rest) = spec.split_once(',').unwrap_or((spec, ""));
+        let (head, rest) = match spec.split_once(',') {
+            Some((head, rest)) => (head, Some(rest)),
+            None => (spec, None),
+        };
         let p = if !head.is_empty() && head.trim().bytes().all(|b| b.is_ascii_digit()) {
             let n = head
                 .trim()
                 .parse::<u8>()
                 .map_err(|_| format!("no level {head}: the levels are 1 to {}", LEVELS.len()))?;
             let base = ScriptedParams::level(n)?;
-            if rest.is_empty() {
-                base
-            } else {
-                base.with_spec(rest)?
+            match rest {
+                Some(rest) => base.with_spec(rest)?,
+                None => base,
             }
         } else if spec.ends_with(".toml") {
             let text = std::fs::read_to_string(spec).map_err(|e| format!("reading {spec}: {e}"))?;
@@ -348,6 +361,8 @@ impl ScriptedParams {
             ("markers", self.markers, 2.0),
             ("set_play_guard", self.set_play_guard, 1.0),
             ("set_play_pass", self.set_play_pass, 1.0),
+            ("hold_turns", self.hold_turns, 1.0),
+            ("aimed_pass", self.aimed_pass, 1.0),
         ] {
             if !(v >= 0.0 && v <= max && v.fract() == 0.0) {
                 return Err(format!(
@@ -548,7 +563,13 @@ impl Scripted {
                 if distance_ok && dtheta_target.abs() < p.b_shoot {
                     return Action::Shoot;
                 }
-                if self.pass_open(obs) {
+                if p.aimed_pass > 0.0 {
+                    // The protocol's pass: a kick at the receiver's feet.
+                    let ahead = pass_receiver(obs).is_some_and(|j| obs.own[j].x > ball[0] + 0.3);
+                    if ahead {
+                        return Action::Pass;
+                    }
+                } else if self.pass_open(obs) {
                     return Action::Shoot;
                 }
                 // Challenged: kick it on rather than push against the opponent.
@@ -758,7 +779,8 @@ impl Policy for Scripted {
             let k = self.p.react_ticks as u64;
             // (Not `is_multiple_of`: the library crates keep Rust 1.86.)
             let phase = (obs.tick.get() + obs.player.index() as u64) % k;
-            if phase != 0 {
+            let turning = matches!(self.last, Action::TurnLeft | Action::TurnRight);
+            if phase != 0 && (self.p.hold_turns > 0.0 || !turning) {
                 return self.last;
             }
         }
@@ -1054,10 +1076,13 @@ mod tests {
             (1.0, 0.0, 0.0, 0.0)
         );
         assert_eq!((d.set_play_guard, d.set_play_pass), (0.0, 0.0));
+        assert_eq!((d.hold_turns, d.aimed_pass), (1.0, 0.0));
         let err = |s: &str| ScriptedParams::parse_spec(s).unwrap_err();
         assert!(err("react_ticks=0").contains("react_ticks"));
         assert!(err("react_ticks=1.5").contains("whole number"));
         assert!(err("markers=3").contains("markers"));
+        assert!(err("hold_turns=2").contains("hold_turns"));
+        assert!(err("aimed_pass=-1").contains("aimed_pass"));
         assert!(err("set_play_guard=0.5").contains("set_play_guard"));
         assert!(err("aim_offset=1.3").contains("inside the goal"));
         assert!(err("keep_out=-1").contains("keep_out"));
@@ -1079,6 +1104,36 @@ mod tests {
         }
         o.tick = Tick::new(5);
         assert_eq!(s.act(&o), Action::Forward);
+        // With hold_turns=0 a turning player decides again every tick.
+        let p = ScriptedParams::parse_spec("react_ticks=3,hold_turns=0").unwrap();
+        let mut s = Scripted::new(p);
+        let mut o = obs(1, robot(0.0, 0.0, 1.2), [1.0, 0.0]);
+        o.tick = Tick::new(2);
+        assert_eq!(s.act(&o), Action::TurnRight);
+        let mut o = obs(1, robot(0.0, 0.0, 0.0), [1.0, 0.0]);
+        o.tick = Tick::new(3);
+        assert_eq!(s.act(&o), Action::Forward);
+        // ...but holds its walk until the next decision.
+        let mut o = obs(1, robot(0.0, 0.0, 1.2), [1.0, 0.0]);
+        o.tick = Tick::new(4);
+        assert_eq!(s.act(&o), Action::Forward);
+    }
+
+    #[test]
+    fn an_aimed_pass_goes_to_a_teammate_ahead() {
+        // Player 1 at the ball facing +x; player 2 ahead in the cone, 1.5 m.
+        let mut o = obs(1, robot(-1.0, 0.0, 0.0), [-0.82, 0.0]);
+        o.own[2] = robot(0.7, 0.3, 0.0);
+        assert_eq!(pass_receiver(&o), Some(2));
+        let p = ScriptedParams::parse_spec("aimed_pass=1").unwrap();
+        assert_eq!(Scripted::new(p).act(&o), Action::Pass);
+        // Today's team kicks straight ahead when a teammate is in its line of
+        // fire, and dribbles otherwise.
+        let today = Scripted::new(ScriptedParams::default()).act(&o);
+        assert!(
+            matches!(today, Action::Shoot | Action::Forward),
+            "{today:?}"
+        );
     }
 
     #[test]
