@@ -166,3 +166,47 @@ fn bad_team_lists_are_refused_with_a_reason() {
     let e = failure(&["league", "scripted", "idle", "--matches", "0"]);
     assert!(e.contains("--matches"), "{e}");
 }
+
+/// The level-against-level evaluations docs/LADDER.md reports
+/// (assets/scripted/ladder/*.json, 200 ten-minute matches each) replay: the
+/// first matches of each, played again, are the same matches, state hash
+/// for state hash (all 200 take minutes; `eval` with the file's settings
+/// replays the whole of one).
+#[test]
+fn the_ladder_evaluations_replay() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scripted/ladder");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .expect("assets/scripted/ladder exists")
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 5, "{files:?}");
+    for f in files {
+        let doc: Value = serde_json::from_str(&std::fs::read_to_string(&f).unwrap()).unwrap();
+        assert_eq!(doc["matches"], 200, "{}", f.display());
+        assert_eq!(doc["both_sides"], true);
+        let seed = doc["seed"].to_string();
+        let got = json(&[
+            "eval",
+            "--blue",
+            doc["blue"]["name"].as_str().unwrap(),
+            "--red",
+            doc["red"]["name"].as_str().unwrap(),
+            "--matches",
+            "2",
+            "--seed",
+            &seed,
+            "--both-sides",
+            "--json",
+        ]);
+        for i in 0..2 {
+            assert_eq!(
+                got["results"][i],
+                doc["results"][i],
+                "{} match {i}",
+                f.display()
+            );
+        }
+    }
+}
