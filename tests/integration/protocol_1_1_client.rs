@@ -130,7 +130,13 @@ async fn a_1_1_client_still_plays() {
     )
     .await;
     match recv(&mut s).await.0 {
-        Msg11::Welcome { version } => assert_eq!((version.major, version.minor), (1, 3)),
+        Msg11::Welcome { version } => assert_eq!(
+            (version.major, version.minor),
+            (
+                naosoccer_proto::msg::PROTOCOL_VERSION.major,
+                naosoccer_proto::msg::PROTOCOL_VERSION.minor
+            )
+        ),
         other => panic!("{other:?}"),
     }
     send(

@@ -889,5 +889,8 @@ impl Slot {
                 aside += 1;
             }
         }
+        // A staged ball, not a kick-off: nobody is held back from it, and
+        // the kick-off rule does not disallow the drill's goal.
+        self.m.clear_set_play();
     }
 }

@@ -29,7 +29,8 @@ mod world;
 pub use config::SimConfig;
 pub use hash::StateHasher;
 pub use model::{
-    CollisionShape, JointInfo, Primitive, RobotModel, NAO_URDF, ROOT_LINK, STANDING_POSE,
+    CollisionShape, JointInfo, Primitive, RobotModel, CAPSULE_SUFFIX, NAO_URDF, ROOT_LINK,
+    STANDING_POSE,
 };
 pub use sim::Sim;
 pub use world::BareWorld;
@@ -107,7 +108,9 @@ pub struct RobotState {
     pub fallen: bool,
     /// In a kick (wind-up or recovery).
     pub kicking: bool,
-    /// The last step in which the robot touched the ball (contact or kick).
+    /// The last step in which the robot touched the ball (contact or kick)
+    /// while the ball was on the pitch: touches of a ball already wholly
+    /// beyond a touch or goal line do not count.
     pub last_ball_touch_step: Option<u64>,
     /// The command it holds.
     pub command: Command,

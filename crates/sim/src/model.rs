@@ -29,6 +29,15 @@ pub const STANDING_POSE: &[(&str, f32)] = &[
     ("RElbowRoll", 0.4),
 ];
 
+/// A `<cylinder>` collision whose `name` ends with this is a capsule: the
+/// cylinder's `radius`, and its `length` the distance between the centres
+/// of the two hemispheres that round it off (as URDF 1.1's `<capsule>`
+/// reads it). URDF 1.0 has no capsule, so the file says `<cylinder>` and
+/// every URDF tool reads it (and draws the capsule without its rounded
+/// ends); this loader makes it the capsule. A cylinder named otherwise is a
+/// cylinder. URDF 1.1's `<capsule>` is read too.
+pub const CAPSULE_SUFFIX: &str = "_capsule";
+
 /// One collision primitive of a link, placed in the torso frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CollisionShape {
@@ -233,6 +242,14 @@ impl RobotModel {
                     urdf_rs::Geometry::Sphere { radius } => Primitive::Sphere {
                         radius: *radius as f32,
                     },
+                    urdf_rs::Geometry::Cylinder { radius, length }
+                        if c.name.as_deref().is_some_and(|n| n.ends_with(CAPSULE_SUFFIX)) =>
+                    {
+                        Primitive::Capsule {
+                            radius: *radius as f32,
+                            half_length: *length as f32 * 0.5,
+                        }
+                    }
                     urdf_rs::Geometry::Cylinder { radius, length } => Primitive::Cylinder {
                         radius: *radius as f32,
                         half_length: *length as f32 * 0.5,

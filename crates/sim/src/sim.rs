@@ -4,7 +4,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rapier3d::math::{Pose, Rot3, Vec3};
-use rapier3d::prelude::{ColliderHandle, PhysicsWorld, RigidBody, RigidBodyHandle};
+use rapier3d::prelude::{ColliderHandle, ColliderSet, PhysicsWorld, RigidBody, RigidBodyHandle};
 
 use crate::hash::StateHasher;
 use crate::place::{body_reach, free_spot, is_clear, Area, CLEARANCE};
@@ -19,6 +19,23 @@ use crate::{
 /// rad/s (a fall from upright under gravity alone reaches about 5 rad/s by
 /// the time it lies).
 const STUMBLE_RATE: f32 = 2.0;
+
+/// A standing robot whose lowest sole point is more than this above the
+/// ground (metres) is off the ground: on another robot, the ball or a
+/// roller, not on the grass.
+const LIFT_HEIGHT: f32 = 0.01;
+
+/// A robot off the ground this long (seconds) has lost its balance and
+/// stumbles (audit: robots stood upright on a lying robot's legs for five
+/// seconds, seed 7 tick 726).
+const LIFT_TIME: f32 = 0.3;
+
+/// Soft-CCD prediction (metres) of a robot falling or lying: a falling
+/// robot's torso moves several centimetres a step, and without predicted
+/// contacts two robots falling onto each other overlapped by 5 cm for a
+/// tick (audit, seed 6 tick 5665). Standing robots do without: it costs
+/// broad-phase work on every body it is set for.
+const FALL_CCD: f32 = 0.1;
 
 /// Controller state of one robot.
 #[derive(Debug, Clone, Copy)]
@@ -36,6 +53,9 @@ struct Ctrl {
     /// The controller is off meanwhile; `fallen` follows once the tilt
     /// passes `fall_tilt` (or never, if the robot catches itself).
     stumble: Option<(f32, f32, u64)>,
+    /// Steps in a row the robot has stood off the ground (see
+    /// `LIFT_HEIGHT`).
+    lifted: u32,
     /// Where a `Pass` kick aims (world frame), as last set.
     pass_target: Option<[f32; 2]>,
     /// The point the kick in progress aims at (a `Pass`), if any.
@@ -52,6 +72,7 @@ impl Default for Ctrl {
             speed_factor: 1.0,
             last_touch: None,
             stumble: None,
+            lifted: 0,
             pass_target: None,
             kick_aim: None,
         }
@@ -81,6 +102,7 @@ pub struct Sim {
     kick_steps: u32,
     noise_period_steps: u64,
     stumble_steps: u64,
+    lift_steps: u32,
 }
 
 impl Sim {
@@ -119,6 +141,7 @@ impl Sim {
             kick_steps: windup_steps + steps_of(cfg.kick_recovery),
             noise_period_steps: u64::from(steps_of(cfg.gait_noise_period).max(1)),
             stumble_steps: u64::from(steps_of(1.0).max(1)),
+            lift_steps: steps_of(LIFT_TIME).max(1),
         };
         sim.refresh_snapshot();
         Ok(sim)
@@ -211,6 +234,14 @@ impl Sim {
             body.reset_forces(false);
             body.reset_torques(false);
             self.strikes[i] = false;
+            let ccd = if c.fallen || c.stumble.is_some() {
+                FALL_CCD
+            } else {
+                0.0
+            };
+            if body.soft_ccd_prediction() != ccd {
+                body.set_soft_ccd_prediction(ccd);
+            }
             if let Some((x, y, since)) = c.stumble {
                 // Throw the body over until it is well past its balance
                 // limit, or give up after a second: held up by whatever it
@@ -258,25 +289,40 @@ impl Sim {
                     c.kick_phase = None;
                 }
             }
-            if c.kick_phase.is_none()
+            // The legs push and balance through the ground only: a robot
+            // standing on another robot (or on a roller, or the ball) gets
+            // no drive force or upright torque, and one that stays up there
+            // for `LIFT_TIME` has lost its balance and stumbles off.
+            let lifted =
+                sole_height(&self.world.colliders, &self.soles, body.position(), i) > LIFT_HEIGHT;
+            c.lifted = if lifted { c.lifted + 1 } else { 0 };
+            let tripped = c.kick_phase.is_none()
                 && c.command == Command::Forward
                 && cfg.stumble_time > 0.0
                 && obstructed(body, &at, i, target_v, cfg.stumble_distance)
-                && self.rng.random::<f32>() < dt / cfg.stumble_time
-            {
+                && self.rng.random::<f32>() < dt / cfg.stumble_time;
+            if tripped || c.lifted >= self.lift_steps {
                 // The gait stumbles: the controller lets go and the robot
                 // topples backward or sideways, away from what blocks it. It
                 // has fallen once it tilts past `fall_tilt`, not before.
                 let away = self.rng.random_range(-1.2f32..=1.2);
                 let h = heading_of(body.rotation()) + std::f32::consts::PI + away;
                 c.stumble = Some((h.cos(), h.sin(), self.steps));
+                c.lifted = 0;
+                continue;
+            }
+            if lifted {
                 continue;
             }
             drive(body, cfg, self.mass, self.yaw_inertia, target_v, target_w);
         }
+        // Whether the ball is still on the pitch as the step begins: the
+        // narrow phase finds this step's contacts in these positions, and
+        // a kick strikes the ball where it lies now.
+        let ball_in = self.ball_in_field();
         for i in 0..ROBOTS {
             if self.strikes[i] {
-                self.strike(i);
+                self.strike(i, ball_in);
             }
         }
 
@@ -300,12 +346,26 @@ impl Sim {
             ball.set_angvel(Vec3::ZERO, false);
         }
         let step = self.steps;
-        for pair in self
+        // A ball wholly beyond the lines has left the pitch: a robot standing
+        // out there that it hits afterwards (within the same control tick,
+        // before the referee sees the ball out) did not touch it last (audit,
+        // seed 4 tick 4646: red's corner kick crossed the goal line, hit a
+        // blue robot behind it, and red got another corner).
+        let touches = self
             .world
             .narrow_phase
             .contact_pairs_with(self.ball_collider)
-        {
-            if !pair.has_any_active_contact() {
+            .filter(|_| ball_in);
+        let near = self.cfg.contact_prediction;
+        for pair in touches {
+            // Within the contact prediction, not merely predicted: a falling
+            // robot's soft CCD predicts contacts centimetres ahead.
+            let touching = pair.has_any_active_contact()
+                && pair
+                    .manifolds()
+                    .iter()
+                    .any(|m| m.points.iter().any(|p| p.dist <= near));
+            if !touching {
                 continue;
             }
             let other = if pair.collider1 == self.ball_collider {
@@ -545,6 +605,31 @@ impl Sim {
         self.refresh_snapshot();
     }
 
+    /// Puts robot `robot`'s torso at `pos` (metres) turned by `rotation`
+    /// (a unit quaternion `[x, y, z, w]`, world from body), at rest, exactly
+    /// there: no search for a free spot, so it may touch or overlap other
+    /// bodies. Tilted past `fall_tilt` it lies fallen, its controller off, as
+    /// after a fall; otherwise it stands with its controller on. Clears a
+    /// stumble and any kick in progress. For staging a situation (a test, a
+    /// scenario); restarts use [`Sim::place_robot`], which keeps bodies
+    /// apart. Panics if `robot >= ROBOTS`.
+    pub fn set_robot_pose(&mut self, robot: usize, pos: [f32; 3], rotation: [f32; 4]) {
+        let rot = Rot3::from_array(rotation).normalize();
+        let body = &mut self.world.bodies[self.robots[robot]];
+        body.set_position(Pose::from_parts(Vec3::from_array(pos), rot), true);
+        body.set_linvel(Vec3::ZERO, true);
+        body.set_angvel(Vec3::ZERO, true);
+        let lying = tilt_of(&rot) > self.cfg.fall_tilt;
+        let c = &mut self.ctrl[robot];
+        if c.fallen != lying {
+            set_sole_friction(&mut self.world, &self.cfg, &self.soles, robot, lying);
+        }
+        c.fallen = lying;
+        c.kick_phase = None;
+        c.stumble = None;
+        self.refresh_snapshot();
+    }
+
     /// FNV-1a over the raw bits of every dynamic body's pose and velocity,
     /// the controllers' state and the noise RNG's seed and position. Equal
     /// on the same build for the same config, seed and commands.
@@ -571,6 +656,7 @@ impl Sim {
             let (x, y, since) = c.stumble.unwrap_or((0.0, 0.0, u64::MAX));
             h.f32s(&[x, y]);
             h.u64(since);
+            h.u64(u64::from(c.lifted));
             // Only a pass changes these, so matches without one keep the
             // hashes they had before `Pass` existed.
             for aim in [c.pass_target, c.kick_aim].into_iter().flatten() {
@@ -594,8 +680,17 @@ impl Sim {
         }
     }
 
-    /// The strike of robot `i`'s kick.
-    fn strike(&mut self, i: usize) {
+    /// Whether the ball is on the pitch: not wholly beyond a touch or goal
+    /// line (the field lines of the config; a ball in a goal is beyond).
+    fn ball_in_field(&self) -> bool {
+        let p = self.world.bodies[self.ball].translation();
+        let r = self.cfg.ball_radius;
+        p.x.abs() <= self.cfg.field_length * 0.5 + r && p.y.abs() <= self.cfg.field_width * 0.5 + r
+    }
+
+    /// The strike of robot `i`'s kick; `ball_in`: the ball is on the pitch
+    /// (a kick of a ball that has left it moves it but is no touch).
+    fn strike(&mut self, i: usize, ball_in: bool) {
         // Draw first, hit or miss, so the RNG stream does not depend on
         // where the ball happens to be.
         let speed_err = self.rng.random_range(-1.0f32..=1.0);
@@ -646,7 +741,9 @@ impl Sim {
         ball.set_linvel(after, true);
         let speed = Vec3::new(after.x, after.y, 0.0).length();
         self.snapshot.kicks.push(Kick { robot: i, speed });
-        self.ctrl[i].last_touch = Some(self.steps + 1);
+        if ball_in {
+            self.ctrl[i].last_touch = Some(self.steps + 1);
+        }
     }
 
     fn refresh_snapshot(&mut self) {
@@ -728,6 +825,25 @@ fn obstructed(body: &RigidBody, at: &[Vec3; ROBOTS], me: usize, target: f32, rea
         let d = Vec3::new(q.x - p.x, q.y - p.y, 0.0);
         j != me && d.length_squared() < reach * reach && d.dot(fwd) > 0.0
     })
+}
+
+/// Height above the ground (z = 0) of robot `robot`'s lowest sole point
+/// with its torso at `torso`, metres.
+fn sole_height(
+    colliders: &ColliderSet,
+    soles: &[(usize, ColliderHandle)],
+    torso: &Pose,
+    robot: usize,
+) -> f32 {
+    soles
+        .iter()
+        .filter(|(i, _)| *i == robot)
+        .map(|&(_, c)| {
+            let co = &colliders[c];
+            let at = torso * co.position_wrt_parent().copied().unwrap_or(Pose::IDENTITY);
+            co.shape().compute_aabb(&at).mins.z
+        })
+        .fold(f32::INFINITY, f32::min)
 }
 
 fn clamp_len(v: Vec3, max: f32) -> Vec3 {
