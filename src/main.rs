@@ -38,6 +38,9 @@ enum Command {
     Train(cmd::not_built::NotBuilt),
     /// Play many matches between two teams; Table I with 95% CIs.
     Eval(cmd::eval::EvalArgs),
+    /// Play a round robin between teams; a Bradley–Terry rating per team
+    /// with 95% intervals, W/D/L and goals by phase.
+    League(cmd::league::LeagueArgs),
     /// Draw training curves (long-term average reward) as a PNG.
     #[cfg(feature = "train")]
     Plot(cmd::learn::PlotArgs),
@@ -61,6 +64,7 @@ fn main() -> std::process::ExitCode {
         Command::Client(args) => cmd::client::run(args),
         Command::Bench(b) => cmd::bench::run(b),
         Command::Eval(args) => cmd::eval::eval_cmd(args),
+        Command::League(args) => cmd::league::league_cmd(args),
         #[cfg(feature = "train")]
         Command::Train(args) => cmd::learn::train_cmd(*args),
         #[cfg(feature = "train")]

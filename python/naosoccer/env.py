@@ -28,7 +28,9 @@ from .obs import (
 )
 from .server import LocalServer
 
-OPPONENTS = ("scripted", "idle", "client")
+#: The ladder of built-in teams, weakest first (``"scripted:3"`` plays as ``"scripted"``).
+SCRIPTED_LEVELS = tuple(f"scripted:{n}" for n in range(1, 6))
+OPPONENTS = ("scripted", *SCRIPTED_LEVELS, "idle", "client")
 
 
 class NaoSoccerParallelEnv(ParallelEnv):
@@ -64,7 +66,9 @@ class NaoSoccerParallelEnv(ParallelEnv):
     pausing for a gradient update does not have ticks played without it. A
     client that disconnects frees the match at once (its robots then stand).
 
-    ``opponent``: ``"scripted"`` (the server's built-in team), ``"idle"``
+    ``opponent``: ``"scripted"`` (the server's built-in team),
+    ``"scripted:1"`` ... ``"scripted:5"`` (the ladder of built-in teams,
+    weakest first; ``"scripted:3"`` is ``"scripted"``), ``"idle"``
     (standing robots) or ``"client"`` (the match waits until another client,
     e.g. a second env with ``team="red"``, has joined the other team: pass it
     the ``match_id`` this env reports through ``on_match`` or
@@ -177,7 +181,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
                 seed=match_seed,
                 minutes=options.get("minutes", self.minutes),
                 mode="lockstep",
-                fill="idle" if self.opponent == "idle" else "scripted",
+                fill="scripted" if self.opponent == "client" else self.opponent,
                 start_players=2 * protocol.PLAYERS_PER_TEAM if two_clients else protocol.PLAYERS_PER_TEAM,
                 deadline_ms=self.deadline_ms,
             )

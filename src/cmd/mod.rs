@@ -2,6 +2,7 @@
 pub mod bench;
 pub mod client;
 pub mod eval;
+pub mod league;
 #[cfg(feature = "train")]
 pub mod learn;
 #[cfg(not(feature = "train"))]

@@ -40,10 +40,16 @@ pub struct ServerArgs {
     /// Match configuration TOML [default: the built-in assets/match.toml].
     #[arg(long, value_name = "FILE")]
     pub match_config: Option<PathBuf>,
-    /// Who plays slots no client joined: scripted, idle, or a trained team
-    /// (ppo:DIR, ppo-greedy:DIR, dqn:DIR, dqn-epsilon:DIR; it plays the
-    /// empty slots of every match, whatever a create_match asks).
-    #[arg(long, value_name = "scripted|idle|ppo:DIR|dqn:DIR")]
+    /// Who plays slots no client joined: scripted, scripted:1 to scripted:5
+    /// (the ladder of built-in teams, weakest first), idle, or, in the
+    /// empty slots of every match whatever a create_match asks, a scripted
+    /// variant (scripted:KEY=VAL,..., scripted:N,KEY=VAL,...,
+    /// scripted:FILE.toml) or a trained team (ppo:DIR, ppo-greedy:DIR,
+    /// dqn:DIR, dqn-epsilon:DIR).
+    #[arg(
+        long,
+        value_name = "scripted[:N]|idle|scripted:KEY=VAL|ppo:DIR|dqn:DIR"
+    )]
     pub fill: Option<String>,
     /// Robots that must join before a match starts, 0..=8 [default: 8].
     #[arg(long)]
@@ -125,7 +131,7 @@ fn config_from(args: &ServerArgs) -> anyhow::Result<ServerConfig> {
     if let Some(f) = args
         .fill
         .as_deref()
-        .filter(|f| !naosoccer_policy::is_learned_spec(f))
+        .filter(|f| !naosoccer_policy::is_learned_spec(f) && !is_variant_fill(f))
     {
         cfg.fill = f
             .parse::<Fill>()
@@ -175,6 +181,12 @@ fn config_from(args: &ServerArgs) -> anyhow::Result<ServerConfig> {
     Ok(cfg)
 }
 
+/// A scripted variant that is no `Fill` of the protocol (not a level): it
+/// plays the empty slots of every match as a fill team does.
+fn is_variant_fill(spec: &str) -> bool {
+    spec.starts_with("scripted:") && spec.parse::<Fill>().is_err()
+}
+
 pub fn init_logging() {
     use tracing_subscriber::EnvFilter;
     let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info"));
@@ -195,6 +207,17 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
             f.to_string(),
             naosoccer_policy::LearnedPolicy::load(f)
                 .with_context(|| format!("loading --fill {f}"))?,
+        )),
+        _ => None,
+    };
+    // A scripted variant, parsed here so that a bad one fails at start. It
+    // plays with its own parameters on any pitch (levels, as `Fill`s, take
+    // the match's pitch sizes).
+    let variant_fill = match args.fill.as_deref() {
+        Some(f) if is_variant_fill(f) => Some((
+            f.to_string(),
+            f.parse::<naosoccer_client::PolicyKind>()
+                .map_err(|e| anyhow::anyhow!("--fill: {e}"))?,
         )),
         _ => None,
     };
@@ -238,6 +261,12 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
                     p.set_match_seed(seed);
                     Box::new(p) as Box<dyn naosoccer_client::Policy>
                 }),
+            });
+        }
+        if let Some((spec, kind)) = variant_fill {
+            hooks.fill = Some(FillTeam {
+                spec,
+                make: Arc::new(move |seed, robot| kind.build(seed, robot)),
             });
         }
         if args.exit_when_done {

@@ -10,6 +10,7 @@
 mod common;
 
 mod eval_blocks;
+mod league_cli;
 mod learn_cli;
 mod learn_client;
 mod learn_shipped;

@@ -312,3 +312,62 @@ async fn a_client_joining_mid_match_gets_the_events_of_the_tick_before() {
     drop((blue, red));
     server.stop().await;
 }
+
+/// A match created with a level of the scripted ladder as its fill plays
+/// that level in the empty slots: the same match as `match --blue
+/// scripted:1 --red scripted:5` in process. It is described with values
+/// every client knows: `fill` "scripted" and `fill_team` "scripted:5".
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_level_of_the_ladder_fills_the_empty_slots() {
+    use naosoccer_client::policy::ScriptedParams;
+    use naosoccer_proto::msg::Fill;
+    let cfg = config(300);
+    let match_cfg = cfg.match_cfg.clone();
+    let server = start(cfg).await;
+    let mut c = Client::connect(server.addr(), "ladder").await.unwrap();
+    let info = c
+        .create_match(CreateMatch {
+            token: ADMIN.into(),
+            seed: Some(9),
+            fill: Some("scripted:5".parse::<Fill>().unwrap()),
+            start_players: Some(4),
+            ..CreateMatch::default()
+        })
+        .await
+        .unwrap();
+    assert_eq!(info.fill, Fill::Scripted);
+    assert_eq!(info.fill_team.as_deref(), Some("scripted:5"));
+    let players = all_players();
+    c.join(Some(info.match_id), Team::Blue, BLUE, &players)
+        .await
+        .unwrap();
+    let one = PolicyKind::scripted_with(ScriptedParams::level(1).unwrap());
+    let mut policies: Vec<_> = players
+        .iter()
+        .map(|p| one.build(9, RobotId::new(Team::Blue, p.index()).unwrap()))
+        .collect();
+    let end = loop {
+        match c.next_push().await.unwrap() {
+            Push::Observation(o) => {
+                let actions: Vec<PlayerAction> = players
+                    .iter()
+                    .zip(&o.observations)
+                    .zip(&mut policies)
+                    .map(|((p, obs), policy)| PlayerAction {
+                        player: *p,
+                        action: policy.act(obs),
+                    })
+                    .collect();
+                c.send_actions(o.tick, &actions).await.unwrap();
+            }
+            Push::MatchEnd(e) => break e,
+            Push::Error(e) => panic!("{e}"),
+        }
+    };
+    let five: PolicyKind = "scripted:5".parse().unwrap();
+    let out = naosoccer::runner::play_match_with(&match_cfg, 9, &one, &five, |_, _, _| {}).unwrap();
+    assert_eq!(end.state_hash, format!("{:016x}", out.state_hash));
+    // A fill the protocol does not know is refused as an invalid argument.
+    assert!("scripted:6".parse::<Fill>().is_err());
+    server.stop().await;
+}

@@ -9,6 +9,7 @@
 //! - [`learned`]: a trained team as the client's `Policy`
 //!   ([`load_policy`]), and as a batch player of many matches at once.
 //! - [`eval`]: many matches between two teams; Table I with 95% CIs.
+//! - [`league`]: a round robin of evaluations and a Bradley–Terry rating.
 //!
 //! crates/learn (tch) trains the networks and depends on this crate; this
 //! crate never depends on it, so every command that only plays links no
@@ -17,6 +18,7 @@
 pub mod actions;
 mod error;
 pub mod eval;
+pub mod league;
 pub mod learned;
 pub mod mlp;
 pub mod obs;

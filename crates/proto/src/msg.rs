@@ -85,16 +85,26 @@ impl std::str::FromStr for Mode {
     }
 }
 
-/// Who plays the slots no client has joined.
+/// Who plays the slots no client has joined. On the wire a string:
+/// `"scripted"`, `"idle"`, or `"scripted:1"` ... `"scripted:5"`, a level of
+/// the ladder of built-in teams (weakest first; `"scripted:3"` plays as
+/// `"scripted"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
+#[serde(try_from = "String", into = "String")]
 pub enum Fill {
     /// The built-in scripted policy.
     #[default]
     Scripted,
     /// The robot stands still.
     Idle,
+    /// A level of the scripted ladder, 1..=[`SCRIPTED_LEVELS`]. A match
+    /// reports it as `fill: "scripted"` with `fill_team: "scripted:N"`, so
+    /// clients that know only the first two values read every match.
+    ScriptedLevel(u8),
 }
+
+/// Levels of the scripted ladder (`Fill::ScriptedLevel`).
+pub const SCRIPTED_LEVELS: u8 = 5;
 
 impl std::str::FromStr for Fill {
     type Err = String;
@@ -102,10 +112,41 @@ impl std::str::FromStr for Fill {
         match s {
             "scripted" => Ok(Fill::Scripted),
             "idle" => Ok(Fill::Idle),
-            other => Err(format!(
-                "unknown fill {other:?} (expected scripted or idle)"
-            )),
+            other => other
+                .strip_prefix("scripted:")
+                .and_then(|n| n.parse::<u8>().ok())
+                .filter(|n| (1..=SCRIPTED_LEVELS).contains(n))
+                .map(Fill::ScriptedLevel)
+                .ok_or_else(|| {
+                    format!(
+                        "unknown fill {other:?} (expected scripted, scripted:1 to \
+                         scripted:{SCRIPTED_LEVELS} or idle)"
+                    )
+                }),
         }
+    }
+}
+
+impl fmt::Display for Fill {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Fill::Scripted => f.write_str("scripted"),
+            Fill::Idle => f.write_str("idle"),
+            Fill::ScriptedLevel(n) => write!(f, "scripted:{n}"),
+        }
+    }
+}
+
+impl TryFrom<String> for Fill {
+    type Error = String;
+    fn try_from(s: String) -> Result<Self, Self::Error> {
+        s.parse()
+    }
+}
+
+impl From<Fill> for String {
+    fn from(f: Fill) -> String {
+        f.to_string()
     }
 }
 
@@ -693,6 +734,33 @@ fn finite_f32<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f32>, D::
 mod tests {
     use super::*;
     use crate::types::{BallObs, RobotObs, ScoreObs};
+
+    #[test]
+    fn fills_are_strings_on_the_wire_levels_included() {
+        for (fill, text) in [
+            (Fill::Scripted, "scripted"),
+            (Fill::Idle, "idle"),
+            (Fill::ScriptedLevel(1), "scripted:1"),
+            (Fill::ScriptedLevel(5), "scripted:5"),
+        ] {
+            assert_eq!(serde_json::to_value(fill).unwrap(), text);
+            assert_eq!(serde_json::from_value::<Fill>(text.into()).unwrap(), fill);
+            assert_eq!(text.parse::<Fill>(), Ok(fill));
+        }
+        for bad in [
+            "scripted:0",
+            "scripted:6",
+            "scripted:x",
+            "scripted:",
+            "level",
+        ] {
+            let e = serde_json::from_value::<Fill>(bad.into()).unwrap_err();
+            assert!(e.to_string().contains("unknown fill"), "{bad}: {e}");
+        }
+        let req: CreateMatch =
+            serde_json::from_str(r#"{"token": "t", "fill": "scripted:4"}"#).unwrap();
+        assert_eq!(req.fill, Some(Fill::ScriptedLevel(4)));
+    }
 
     fn obs(player: u8) -> Observation {
         Observation {

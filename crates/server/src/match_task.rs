@@ -107,6 +107,9 @@ impl MatchTask {
             // On this match's pitch (the defaults on the default pitch).
             Fill::Scripted => PolicyKind::scripted_with(ScriptedParams::for_pitch(&game.pitch())),
             Fill::Idle => PolicyKind::Idle,
+            // Levels 1..=5 only: the protocol refuses others.
+            Fill::ScriptedLevel(n) => ScriptedParams::level_for_pitch(n, &game.pitch())
+                .map_or(PolicyKind::Scripted, PolicyKind::scripted_with),
         };
         let fillers = match custom_fill {
             Some(policies) => policies.into_iter().map(Some).collect(),

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use naosoccer_proto::msg::{EndReason, Fill, MatchEnd, MatchInfo, Mode};
+use naosoccer_proto::msg::{EndReason, MatchEnd, MatchInfo, Mode};
 use naosoccer_record::{MatchMeta, Recorder, RecorderOptions};
 use naosoccer_referee::Match;
 
@@ -41,16 +41,9 @@ impl McapObserver {
     }
 }
 
-fn fill_name(fill: Fill) -> &'static str {
-    match fill {
-        Fill::Scripted => "scripted",
-        Fill::Idle => "idle",
-    }
-}
-
 impl MatchObserver for McapObserver {
     fn on_start(&mut self, info: &MatchInfo, game: &Match) {
-        let fill = info.fill_team.as_deref().unwrap_or(fill_name(info.fill));
+        let fill = info.fill_team.clone().unwrap_or(info.fill.to_string());
         let players = format!("clients, empty slots {fill}");
         let mut meta = MatchMeta::of(game, &players, &players, "server");
         meta.match_id = Some(info.match_id.0);

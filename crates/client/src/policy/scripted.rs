@@ -17,7 +17,9 @@
 //! robot, as the server and runner build them, is deterministic.
 
 use naosoccer_proto::msg::Pitch;
-use naosoccer_proto::{Action, Observation, RobotObs, PLAYERS_PER_TEAM};
+use naosoccer_proto::{
+    pass_receiver, Action, Observation, RobotObs, SetPlayKind, PLAYERS_PER_TEAM,
+};
 use serde::{Deserialize, Serialize};
 
 use super::Policy;
@@ -76,7 +78,75 @@ pub struct ScriptedParams {
     pub cover_behind: f32,
     /// ...but no further forward than this x (m): how high the team presses.
     pub cover_max_x: f32,
+    /// Reaction: a player decides only every this many control ticks (a
+    /// whole number, 1 or more; player `i` on the ticks where
+    /// `(tick + i) % react_ticks == 0`) and repeats its last action in
+    /// between. 1: every tick (off).
+    pub react_ticks: f32,
+    /// With `react_ticks` above 1: whether a turn is held like the other
+    /// actions (1), or a turning player decides again every tick (0).
+    pub hold_turns: f32,
+    /// Passing: at 1, a player at the ball passes with `pass` (the
+    /// protocol's kick toward the teammate [`naosoccer_proto::pass_receiver`]
+    /// names) whenever that teammate stands ahead of the ball, instead of
+    /// kicking straight ahead when a teammate is in its line of fire
+    /// (`pass_range`, `pass_cone`). 0: off.
+    pub aimed_pass: f32,
+    /// Aim: a shot aims this far (m) from the goal centre toward the post
+    /// farther from the opponents' keeper, and the angle condition is taken
+    /// against that point. 0: the centre (off).
+    pub aim_offset: f32,
+    /// Keeper: when above 0, the keeper's place is on the line from its goal
+    /// centre to the ball, this far (m) from the goal centre, instead of on
+    /// its line following the ball's y. 0: off.
+    pub keeper_guard: f32,
+    /// Marking: how many of the two field players that do not engage (0, 1
+    /// or 2) mark an opponent instead of taking a support place: the
+    /// covering player first. A marker stands `mark_gap` goal-side of the
+    /// opponent nearest its own goal (the next one for the second marker),
+    /// leaving out the opponent nearest the ball and any opponent more than
+    /// `mark_range` from the own goal centre. 0: off.
+    pub markers: f32,
+    /// See `markers` (m).
+    pub mark_gap: f32,
+    /// See `markers` (m).
+    pub mark_range: f32,
+    /// Defending set plays: when 1, at the other team's kick-off or set play
+    /// the field players leave the ball: the one nearest it stands on the
+    /// line from the ball to the own goal, `keep_out` from the ball, and the
+    /// others in the lanes from the ball to the two opponents most likely
+    /// to receive (nearest the ball after the taker), `keep_out` from the
+    /// ball or goal-side of the receiver when it is closer. 0: off (they go
+    /// for the ball and wait at the edge of the circle).
+    pub set_play_guard: f32,
+    /// See `set_play_guard`: just outside the referee's keep-out distance
+    /// (`set_play_distance`, 0.6 m by default), which the observation does
+    /// not carry (m).
+    pub keep_out: f32,
+    /// Taking set plays: when 1, at the team's own kick-off or set play the
+    /// player at the ball plays it with `pass` when a teammate can receive
+    /// ([`naosoccer_proto::pass_receiver`]) and, with more than
+    /// `set_play_wait` seconds of the set play left, waits for one;
+    /// otherwise it plays on as usual. 0: off.
+    pub set_play_pass: f32,
+    /// See `set_play_pass` (s).
+    pub set_play_wait: f32,
 }
+
+/// The ladder of built-in teams, weakest first: level `n` is
+/// `LEVELS[n - 1]`, a file of `KEY = VAL` lines (assets/scripted/levels/,
+/// built into the binary) over the defaults. Level [`DEFAULT_LEVEL`] is
+/// the plain scripted team: its file changes nothing.
+pub const LEVELS: [&str; 5] = [
+    include_str!("../../../../assets/scripted/levels/level-1.toml"),
+    include_str!("../../../../assets/scripted/levels/level-2.toml"),
+    include_str!("../../../../assets/scripted/levels/level-3.toml"),
+    include_str!("../../../../assets/scripted/levels/level-4.toml"),
+    include_str!("../../../../assets/scripted/levels/level-5.toml"),
+];
+
+/// The level that is the plain scripted team (`scripted:3` = `scripted`).
+pub const DEFAULT_LEVEL: u8 = 3;
 
 impl Default for ScriptedParams {
     fn default() -> Self {
@@ -101,6 +171,18 @@ impl Default for ScriptedParams {
             support_ahead: 1.3,
             cover_behind: 1.2,
             cover_max_x: 1.0,
+            react_ticks: 1.0,
+            hold_turns: 1.0,
+            aimed_pass: 0.0,
+            aim_offset: 0.0,
+            keeper_guard: 0.0,
+            markers: 0.0,
+            mark_gap: 0.5,
+            mark_range: 3.5,
+            set_play_guard: 0.0,
+            keep_out: 0.7,
+            set_play_pass: 0.0,
+            set_play_wait: 8.0,
         }
     }
 }
@@ -118,6 +200,30 @@ impl ScriptedParams {
         }
     }
 
+    /// Level `n` of the ladder ([`LEVELS`], 1 = the weakest) on the
+    /// default pitch.
+    pub fn level(n: u8) -> Result<ScriptedParams, String> {
+        let text = usize::from(n)
+            .checked_sub(1)
+            .and_then(|i| LEVELS.get(i))
+            .ok_or_else(|| format!("no level {n}: the levels are 1 to {}", LEVELS.len()))?;
+        let p = toml::from_str::<ScriptedParams>(text).map_err(|e| format!("level {n}: {e}"))?;
+        p.validate().map_err(|e| format!("level {n}: {e}"))?;
+        Ok(p)
+    }
+
+    /// Level `n` on `pitch`, as [`ScriptedParams::for_pitch`] adapts the
+    /// defaults (a level changes no pitch size).
+    pub fn level_for_pitch(n: u8, pitch: &Pitch) -> Result<ScriptedParams, String> {
+        let on_pitch = ScriptedParams::for_pitch(pitch);
+        Ok(ScriptedParams {
+            half_length: on_pitch.half_length,
+            goal_half_width: on_pitch.goal_half_width,
+            b_rad: on_pitch.b_rad,
+            ..ScriptedParams::level(n)?
+        })
+    }
+
     /// The field names, alphabetically.
     pub fn keys() -> Vec<String> {
         match serde_json::to_value(ScriptedParams::default()) {
@@ -127,44 +233,65 @@ impl ScriptedParams {
     }
 
     /// Parses what follows `scripted:` in a policy spec: `KEY=VAL,KEY=VAL`
-    /// (the fields of this struct, in metres and radians) or the path of a
-    /// TOML file (ending in `.toml`) holding `KEY = VAL` lines. Fields not
-    /// named keep their defaults; unknown keys, numbers that do not parse
-    /// and values that make no sense (see [`ScriptedParams::validate`]) are
-    /// errors that say which.
+    /// (the fields of this struct, in metres and radians), the path of a
+    /// TOML file (ending in `.toml`) holding `KEY = VAL` lines, or a level
+    /// of the ladder, `N` or `N,KEY=VAL,...` (level `N`'s parameters with
+    /// those changed). Fields not named keep their defaults (a level's
+    /// values); unknown keys, numbers that do not parse and values that
+    /// make no sense (see [`ScriptedParams::validate`]) are errors that say
+    /// which.
     pub fn parse_spec(spec: &str) -> Result<ScriptedParams, String> {
-        let p = if spec.ends_with(".toml") {
+        let (head, rest) = match spec.split_once(',') {
+            Some((head, rest)) => (head, Some(rest)),
+            None => (spec, None),
+        };
+        let p = if !head.is_empty() && head.trim().bytes().all(|b| b.is_ascii_digit()) {
+            let n = head
+                .trim()
+                .parse::<u8>()
+                .map_err(|_| format!("no level {head}: the levels are 1 to {}", LEVELS.len()))?;
+            let base = ScriptedParams::level(n)?;
+            match rest {
+                Some(rest) => base.with_spec(rest)?,
+                None => base,
+            }
+        } else if spec.ends_with(".toml") {
             let text = std::fs::read_to_string(spec).map_err(|e| format!("reading {spec}: {e}"))?;
             toml::from_str::<ScriptedParams>(&text).map_err(|e| format!("{spec}: {e}"))?
         } else {
-            let mut map = match serde_json::to_value(ScriptedParams::default()) {
-                Ok(serde_json::Value::Object(m)) => m,
-                _ => return Err("scripted parameters do not serialise".into()),
-            };
-            for item in spec.split(',') {
-                let (key, val) = item
-                    .split_once('=')
-                    .ok_or_else(|| format!("expected KEY=VAL, got {item:?}"))?;
-                let key = key.trim();
-                if !map.contains_key(key) {
-                    return Err(format!(
-                        "unknown scripted parameter {key:?} (known: {})",
-                        ScriptedParams::keys().join(", ")
-                    ));
-                }
-                let v: f32 = val
-                    .trim()
-                    .parse()
-                    .map_err(|_| format!("{key}: {val:?} is not a number"))?;
-                if !v.is_finite() {
-                    return Err(format!("{key} must be a finite number, got {v}"));
-                }
-                map.insert(key.to_string(), serde_json::json!(v));
-            }
-            serde_json::from_value(serde_json::Value::Object(map)).map_err(|e| e.to_string())?
+            ScriptedParams::default().with_spec(spec)?
         };
         p.validate()?;
         Ok(p)
+    }
+
+    /// These parameters with `KEY=VAL,...` changed.
+    fn with_spec(self, spec: &str) -> Result<ScriptedParams, String> {
+        let mut map = match serde_json::to_value(self) {
+            Ok(serde_json::Value::Object(m)) => m,
+            _ => return Err("scripted parameters do not serialise".into()),
+        };
+        for item in spec.split(',') {
+            let (key, val) = item
+                .split_once('=')
+                .ok_or_else(|| format!("expected KEY=VAL, got {item:?}"))?;
+            let key = key.trim();
+            if !map.contains_key(key) {
+                return Err(format!(
+                    "unknown scripted parameter {key:?} (known: {})",
+                    ScriptedParams::keys().join(", ")
+                ));
+            }
+            let v: f32 = val
+                .trim()
+                .parse()
+                .map_err(|_| format!("{key}: {val:?} is not a number"))?;
+            if !v.is_finite() {
+                return Err(format!("{key} must be a finite number, got {v}"));
+            }
+            map.insert(key.to_string(), serde_json::json!(v));
+        }
+        serde_json::from_value(serde_json::Value::Object(map)).map_err(|e| e.to_string())
     }
 
     /// Every value finite; lengths, angles and ranges positive; the kick
@@ -192,6 +319,12 @@ impl ScriptedParams {
             ("turn_stop", self.turn_stop),
             ("support_ahead", self.support_ahead),
             ("cover_behind", self.cover_behind),
+            ("aim_offset", self.aim_offset),
+            ("keeper_guard", self.keeper_guard),
+            ("mark_gap", self.mark_gap),
+            ("mark_range", self.mark_range),
+            ("keep_out", self.keep_out),
+            ("set_play_wait", self.set_play_wait),
         ];
         for (k, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -213,6 +346,34 @@ impl ScriptedParams {
             return Err(format!(
                 "reach_min ({}) must be below reach_max ({})",
                 self.reach_min, self.reach_max
+            ));
+        }
+        if !(self.react_ticks >= 1.0
+            && self.react_ticks <= 100.0
+            && self.react_ticks.fract() == 0.0)
+        {
+            return Err(format!(
+                "react_ticks must be a whole number from 1 to 100, got {}",
+                self.react_ticks
+            ));
+        }
+        for (k, v, max) in [
+            ("markers", self.markers, 2.0),
+            ("set_play_guard", self.set_play_guard, 1.0),
+            ("set_play_pass", self.set_play_pass, 1.0),
+            ("hold_turns", self.hold_turns, 1.0),
+            ("aimed_pass", self.aimed_pass, 1.0),
+        ] {
+            if !(v >= 0.0 && v <= max && v.fract() == 0.0) {
+                return Err(format!(
+                    "{k} must be a whole number from 0 to {max}, got {v}"
+                ));
+            }
+        }
+        if self.aim_offset >= self.goal_half_width {
+            return Err(format!(
+                "aim_offset ({}) must be inside the goal, below goal_half_width ({})",
+                self.aim_offset, self.goal_half_width
             ));
         }
         if self.turn_stop > self.turn_start {
@@ -259,6 +420,8 @@ pub struct Scripted {
     stuck: u32,
     /// Ticks left walking out of a jam.
     escape: u32,
+    /// The last action decided, held between decisions (`react_ticks`).
+    last: Action,
 }
 
 /// Ticks of turning without effect before a player walks out of a jam.
@@ -274,10 +437,17 @@ impl Scripted {
             turned_from: None,
             stuck: 0,
             escape: 0,
+            last: Action::Stay,
         }
     }
 
     fn decide(&mut self, obs: &Observation) -> Action {
+        if self.p.set_play_guard > 0.0
+            && obs.player.index() != 0
+            && obs.set_play.is_some_and(|sp| !sp.own)
+        {
+            return self.guard_set_play(obs);
+        }
         if obs.player.index() == 0 {
             self.keeper(obs)
         } else {
@@ -293,7 +463,16 @@ impl Scripted {
         if ball[0] < own_line + p.keeper_zone && ball[1].abs() < p.goal_half_width + 0.6 {
             return self.engage(obs, true);
         }
-        let home = [own_line + 0.35, (ball[1] * 0.4).clamp(-0.7, 0.7)];
+        let home = if p.keeper_guard > 0.0 {
+            // On the line from the goal centre to the ball.
+            let goal = [own_line, 0.0];
+            let to = sub(ball, goal);
+            let u = scale(to, 1.0 / norm(to).max(1e-6));
+            let spot = add(goal, scale(u, p.keeper_guard));
+            [spot[0].max(own_line + 0.15), spot[1]]
+        } else {
+            [own_line + 0.35, (ball[1] * 0.4).clamp(-0.7, 0.7)]
+        };
         if dist([me.x, me.y], home) > p.arrive {
             self.go_to(me, home)
         } else {
@@ -314,7 +493,14 @@ impl Scripted {
             .count();
         let side = if ball[1] >= 0.0 { -1.0 } else { 1.0 };
         let hl = self.p.half_length;
-        let spot = if rank == 0 {
+        // The covering player (rank 1) marks first, then the support player.
+        let marked = 1usize
+            .checked_sub(rank)
+            .filter(|&k| (k as f32) < self.p.markers)
+            .and_then(|k| self.mark_spot(obs, k));
+        let spot = if let Some(spot) = marked {
+            spot
+        } else if rank == 0 {
             // Ahead of the ball, across from it: a pass or a rebound comes here.
             [
                 (ball[0] + self.p.support_ahead).clamp(-1.5, hl - 0.7),
@@ -341,7 +527,7 @@ impl Scripted {
         let me = obs.me();
         let pos = [me.x, me.y];
         let ball = [obs.ball.x, obs.ball.y];
-        let goal = [p.half_length, 0.0];
+        let goal = [p.half_length, self.aim_y(obs)];
         let to_goal = sub(goal, ball);
         let line = to_goal[1].atan2(to_goal[0]);
         let to_ball = sub(ball, pos);
@@ -360,10 +546,30 @@ impl Scripted {
             if in_reach {
                 let distance_ok =
                     ball[0] > p.half_length - p.shoot_range && ball[1].abs() < p.goal_half_width;
+                if let Some(sp) = obs.set_play.filter(|sp| sp.own && p.set_play_pass > 0.0) {
+                    // A kick-off goal counts only after another robot's touch.
+                    let direct = sp.kind != SetPlayKind::KickOff
+                        && distance_ok
+                        && dtheta_target.abs() < p.b_shoot;
+                    if !direct {
+                        if pass_receiver(obs).is_some() {
+                            return Action::Pass;
+                        }
+                        if sp.ticks_left as f32 > p.set_play_wait {
+                            return Action::Stay;
+                        }
+                    }
+                }
                 if distance_ok && dtheta_target.abs() < p.b_shoot {
                     return Action::Shoot;
                 }
-                if self.pass_open(obs) {
+                if p.aimed_pass > 0.0 {
+                    // The protocol's pass: a kick at the receiver's feet.
+                    let ahead = pass_receiver(obs).is_some_and(|j| obs.own[j].x > ball[0] + 0.3);
+                    if ahead {
+                        return Action::Pass;
+                    }
+                } else if self.pass_open(obs) {
                     return Action::Shoot;
                 }
                 // Challenged: kick it on rather than push against the opponent.
@@ -401,6 +607,103 @@ impl Scripted {
             sub(ball, scale(u, p.behind))
         };
         self.go_to(me, target)
+    }
+
+    /// Where shots aim across the goal mouth: the centre, or `aim_offset`
+    /// toward the post farther from the opponent nearest the goal centre
+    /// (their keeper, as far as the observation tells).
+    fn aim_y(&self, obs: &Observation) -> f32 {
+        if self.p.aim_offset <= 0.0 {
+            return 0.0;
+        }
+        let goal = [self.p.half_length, 0.0];
+        let keeper = obs
+            .opponents
+            .iter()
+            .filter(|o| !o.fallen)
+            .map(|o| (dist([o.x, o.y], goal), o.y))
+            .fold(None, |best: Option<(f32, f32)>, c| match best {
+                Some(b) if b.0 <= c.0 => Some(b),
+                _ => Some(c),
+            });
+        match keeper {
+            Some((_, y)) if y >= 0.0 => -self.p.aim_offset,
+            _ => self.p.aim_offset,
+        }
+    }
+
+    /// The place of the `k`-th marker (0: the first): `mark_gap` goal-side
+    /// of the `k`-th opponent nearest the own goal, leaving out the one
+    /// nearest the ball, fallen ones and those beyond `mark_range`.
+    fn mark_spot(&self, obs: &Observation, k: usize) -> Option<[f32; 2]> {
+        let p = &self.p;
+        let ball = [obs.ball.x, obs.ball.y];
+        let goal = [-p.half_length, 0.0];
+        let at_ball = nearest(&obs.opponents, ball);
+        let mut targets: Vec<(f32, usize)> = (0..PLAYERS_PER_TEAM)
+            .filter(|&i| Some(i) != at_ball && !obs.opponents[i].fallen)
+            .map(|i| (dist([obs.opponents[i].x, obs.opponents[i].y], goal), i))
+            .filter(|&(d, _)| d <= p.mark_range)
+            .collect();
+        targets.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let (_, i) = *targets.get(k)?;
+        let o = [obs.opponents[i].x, obs.opponents[i].y];
+        let to = sub(goal, o);
+        Some(add(o, scale(to, p.mark_gap / norm(to).max(1e-6))))
+    }
+
+    /// At the other team's set play: the field player nearest the ball
+    /// blocks the line from the ball to the own goal, the others the lanes
+    /// to the two likeliest receivers, all just outside the keep-out circle.
+    fn guard_set_play(&mut self, obs: &Observation) -> Action {
+        let p = self.p;
+        let me = obs.me();
+        let pos = [me.x, me.y];
+        let ball = [obs.ball.x, obs.ball.y];
+        let goal = [-p.half_length, 0.0];
+        let by_ball = |robots: &[RobotObs], skip: &dyn Fn(usize) -> bool| {
+            let mut v: Vec<(f32, usize)> = (0..PLAYERS_PER_TEAM)
+                .filter(|&i| !skip(i) && !robots[i].fallen)
+                .map(|i| (dist([robots[i].x, robots[i].y], ball), i))
+                .collect();
+            v.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            v.into_iter().map(|(_, i)| i).collect::<Vec<_>>()
+        };
+        let mates = by_ball(&obs.own, &|i| i == 0);
+        let rank = mates
+            .iter()
+            .position(|&i| i == obs.player.index())
+            .unwrap_or(0);
+        let spot = if rank == 0 {
+            let to = sub(goal, ball);
+            add(ball, scale(to, p.keep_out / norm(to).max(1e-6)))
+        } else {
+            // The taker is the opponent nearest the ball.
+            let receivers = by_ball(&obs.opponents, &|_| false);
+            match receivers.get(rank) {
+                Some(&j) => {
+                    let r = [obs.opponents[j].x, obs.opponents[j].y];
+                    let lane = sub(r, ball);
+                    let len = norm(lane);
+                    if len > p.keep_out + p.mark_gap {
+                        add(ball, scale(lane, p.keep_out / len))
+                    } else {
+                        let to = sub(goal, r);
+                        add(r, scale(to, p.mark_gap / norm(to).max(1e-6)))
+                    }
+                }
+                None => {
+                    let to = sub(goal, ball);
+                    add(ball, scale(to, (p.keep_out + 1.0) / norm(to).max(1e-6)))
+                }
+            }
+        };
+        if dist(pos, spot) > p.arrive {
+            let waypoint = around(ball, pos, spot, 0.9 * p.keep_out);
+            self.go_to(me, waypoint)
+        } else {
+            self.face(me, ball)
+        }
     }
 
     /// A teammate ahead in the line of fire, with no opponent near the lane.
@@ -469,7 +772,17 @@ impl Policy for Scripted {
             self.turned_from = None;
             self.stuck = 0;
             self.escape = 0;
+            self.last = Action::Stay;
             return Action::Stay;
+        }
+        if self.p.react_ticks > 1.0 {
+            let k = self.p.react_ticks as u64;
+            // (Not `is_multiple_of`: the library crates keep Rust 1.86.)
+            let phase = (obs.tick.get() + obs.player.index() as u64) % k;
+            let turning = matches!(self.last, Action::TurnLeft | Action::TurnRight);
+            if phase != 0 && (self.p.hold_turns > 0.0 || !turning) {
+                return self.last;
+            }
         }
         if let Some(from) = self.turned_from.take() {
             if wrap(heading - from).abs() < 0.01 {
@@ -487,12 +800,14 @@ impl Policy for Scripted {
         }
         if self.escape > 0 {
             self.escape -= 1;
+            self.last = Action::Forward;
             return Action::Forward;
         }
         let action = self.decide(obs);
         if matches!(action, Action::TurnLeft | Action::TurnRight) {
             self.turned_from = Some(heading);
         }
+        self.last = action;
         action
     }
 
@@ -516,6 +831,37 @@ fn engager(obs: &Observation) -> Option<usize> {
             _ => Some(c),
         })
         .map(|(_, i)| i)
+}
+
+/// The robot of `robots` nearest `p` (standing or not; lower number on a tie).
+fn nearest(robots: &[RobotObs; PLAYERS_PER_TEAM], p: [f32; 2]) -> Option<usize> {
+    (0..PLAYERS_PER_TEAM)
+        .map(|i| (dist([robots[i].x, robots[i].y], p), i))
+        .fold(None, |best: Option<(f32, usize)>, c| match best {
+            Some(b) if b.0 <= c.0 => Some(b),
+            _ => Some(c),
+        })
+        .map(|(_, i)| i)
+}
+
+/// Where to walk from `from` toward `to` without crossing the circle of
+/// radius `r` round `centre`: `to` itself when the straight path stays
+/// outside, else a point on the circle at most a radian further round
+/// from `from`, on the shorter way.
+fn around(centre: [f32; 2], from: [f32; 2], to: [f32; 2], r: f32) -> [f32; 2] {
+    let seg = sub(to, from);
+    let len2 = dot(seg, seg).max(1e-9);
+    let t = (dot(sub(centre, from), seg) / len2).clamp(0.0, 1.0);
+    if dist(add(from, scale(seg, t)), centre) >= r {
+        return to;
+    }
+    let a_from = sub(from, centre);
+    let a_to = sub(to, centre);
+    let a0 = a_from[1].atan2(a_from[0]);
+    let step = wrap(a_to[1].atan2(a_to[0]) - a0).clamp(-1.0, 1.0);
+    let rad = r.max(norm(a_from));
+    let a = a0 + step;
+    [centre[0] + rad * a.cos(), centre[1] + rad * a.sin()]
 }
 
 fn turn_towards(err: f32) -> Action {
@@ -665,6 +1011,7 @@ mod tests {
         let mut names: Vec<_> = std::fs::read_dir(dir)
             .unwrap()
             .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
             .collect();
         names.sort();
         assert!(names.len() >= 2, "{names:?}");
@@ -672,6 +1019,186 @@ mod tests {
             let p = ScriptedParams::parse_spec(path.to_str().unwrap()).unwrap();
             assert_ne!(p, ScriptedParams::default(), "{}", path.display());
         }
+    }
+
+    #[test]
+    fn the_levels_parse_and_level_3_is_the_scripted_team() {
+        let levels: Vec<ScriptedParams> = (1..=LEVELS.len() as u8)
+            .map(|n| ScriptedParams::level(n).unwrap())
+            .collect();
+        assert_eq!(
+            levels[usize::from(DEFAULT_LEVEL) - 1],
+            ScriptedParams::default()
+        );
+        for (i, a) in levels.iter().enumerate() {
+            for b in &levels[i + 1..] {
+                assert_ne!(a, b);
+            }
+            // A level changes no pitch size.
+            let d = ScriptedParams::default();
+            assert_eq!(
+                (a.half_length, a.goal_half_width, a.b_rad),
+                (d.half_length, d.goal_half_width, d.b_rad)
+            );
+        }
+        // The files on disk are the levels built in.
+        for (i, text) in LEVELS.iter().enumerate() {
+            let path = format!(
+                "{}/../../assets/scripted/levels/level-{}.toml",
+                env!("CARGO_MANIFEST_DIR"),
+                i + 1
+            );
+            assert_eq!(std::fs::read_to_string(&path).unwrap(), *text, "{path}");
+            assert_eq!(ScriptedParams::parse_spec(&path).unwrap(), levels[i]);
+        }
+        let five = ScriptedParams::parse_spec("5,b_shoot=0.3").unwrap();
+        assert_eq!(
+            five,
+            ScriptedParams {
+                b_shoot: 0.3,
+                ..levels[4]
+            }
+        );
+        assert_eq!(ScriptedParams::parse_spec("2").unwrap(), levels[1]);
+        for bad in ["0", "6", "300", "5,", "5,b_shot=1"] {
+            assert!(ScriptedParams::parse_spec(bad).is_err(), "{bad}");
+        }
+        assert!(ScriptedParams::parse_spec("6")
+            .unwrap_err()
+            .contains("the levels are 1 to 5"));
+    }
+
+    #[test]
+    fn off_values_are_the_defaults_and_bad_values_are_refused() {
+        let d = ScriptedParams::default();
+        assert_eq!(
+            (d.react_ticks, d.aim_offset, d.keeper_guard, d.markers),
+            (1.0, 0.0, 0.0, 0.0)
+        );
+        assert_eq!((d.set_play_guard, d.set_play_pass), (0.0, 0.0));
+        assert_eq!((d.hold_turns, d.aimed_pass), (1.0, 0.0));
+        let err = |s: &str| ScriptedParams::parse_spec(s).unwrap_err();
+        assert!(err("react_ticks=0").contains("react_ticks"));
+        assert!(err("react_ticks=1.5").contains("whole number"));
+        assert!(err("markers=3").contains("markers"));
+        assert!(err("hold_turns=2").contains("hold_turns"));
+        assert!(err("aimed_pass=-1").contains("aimed_pass"));
+        assert!(err("set_play_guard=0.5").contains("set_play_guard"));
+        assert!(err("aim_offset=1.3").contains("inside the goal"));
+        assert!(err("keep_out=-1").contains("keep_out"));
+    }
+
+    #[test]
+    fn a_slow_player_holds_its_action_between_decisions() {
+        let p = ScriptedParams::parse_spec("react_ticks=3").unwrap();
+        let mut s = Scripted::new(p);
+        // Player 1 decides when (tick + 1) % 3 == 0: at tick 2, then 5.
+        let mut o = obs(1, robot(0.0, 0.0, 1.2), [1.0, 0.0]);
+        o.tick = Tick::new(2);
+        assert_eq!(s.act(&o), Action::TurnRight);
+        // Facing the ball now, but it keeps turning until it decides again.
+        let mut o = obs(1, robot(0.0, 0.0, 0.0), [1.0, 0.0]);
+        for t in [3, 4] {
+            o.tick = Tick::new(t);
+            assert_eq!(s.act(&o), Action::TurnRight, "tick {t}");
+        }
+        o.tick = Tick::new(5);
+        assert_eq!(s.act(&o), Action::Forward);
+        // With hold_turns=0 a turning player decides again every tick.
+        let p = ScriptedParams::parse_spec("react_ticks=3,hold_turns=0").unwrap();
+        let mut s = Scripted::new(p);
+        let mut o = obs(1, robot(0.0, 0.0, 1.2), [1.0, 0.0]);
+        o.tick = Tick::new(2);
+        assert_eq!(s.act(&o), Action::TurnRight);
+        let mut o = obs(1, robot(0.0, 0.0, 0.0), [1.0, 0.0]);
+        o.tick = Tick::new(3);
+        assert_eq!(s.act(&o), Action::Forward);
+        // ...but holds its walk until the next decision.
+        let mut o = obs(1, robot(0.0, 0.0, 1.2), [1.0, 0.0]);
+        o.tick = Tick::new(4);
+        assert_eq!(s.act(&o), Action::Forward);
+    }
+
+    #[test]
+    fn an_aimed_pass_goes_to_a_teammate_ahead() {
+        // Player 1 at the ball facing +x; player 2 ahead in the cone, 1.5 m.
+        let mut o = obs(1, robot(-1.0, 0.0, 0.0), [-0.82, 0.0]);
+        o.own[2] = robot(0.7, 0.3, 0.0);
+        assert_eq!(pass_receiver(&o), Some(2));
+        let p = ScriptedParams::parse_spec("aimed_pass=1").unwrap();
+        assert_eq!(Scripted::new(p).act(&o), Action::Pass);
+        // Today's team kicks straight ahead when a teammate is in its line of
+        // fire, and dribbles otherwise.
+        let today = Scripted::new(ScriptedParams::default()).act(&o);
+        assert!(
+            matches!(today, Action::Shoot | Action::Forward),
+            "{today:?}"
+        );
+    }
+
+    #[test]
+    fn a_guarding_keeper_stands_between_ball_and_goal() {
+        let p = ScriptedParams::parse_spec("keeper_guard=1").unwrap();
+        let ball = [0.0f32, 1.5];
+        // Its place: 1 m from the goal centre (-3, 0) toward the ball.
+        let u = [3.0 / 45f32.sqrt() * 2.0, 1.5 / 45f32.sqrt() * 2.0];
+        let place = [-3.0 + u[0], u[1]];
+        let facing = robot(
+            place[0],
+            place[1],
+            (ball[1] - place[1]).atan2(ball[0] - place[0]),
+        );
+        assert_eq!(Scripted::new(p).act(&obs(0, facing, ball)), Action::Stay);
+        // Today's keeper stands on its line (y follows the ball), so it
+        // walks back from there.
+        let today = Scripted::new(ScriptedParams::default()).act(&obs(0, facing, ball));
+        assert_ne!(today, Action::Stay);
+    }
+
+    #[test]
+    fn at_the_other_teams_set_play_a_guard_blocks_the_way_to_goal() {
+        use naosoccer_proto::{SetPlayKind, SetPlayObs};
+        let p = ScriptedParams::parse_spec("set_play_guard=1").unwrap();
+        // A kick-in at (1, 2.2) for the other team; player 1, the nearest
+        // to the ball, stands 1.6 m below it, facing it.
+        let ball = [1.0f32, 2.2];
+        let heading = std::f32::consts::FRAC_PI_2;
+        let mut o = obs(1, robot(1.0, 0.6, heading), ball);
+        o.set_play = Some(SetPlayObs {
+            kind: SetPlayKind::KickIn,
+            own: false,
+            ticks_left: 100,
+        });
+        // It turns toward the spot on the line from the ball to its goal,
+        // 0.7 m from the ball...
+        let to = [-3.0 - ball[0], -ball[1]];
+        let n = norm(to);
+        let spot = [ball[0] + 0.7 * to[0] / n, ball[1] + 0.7 * to[1] / n];
+        let err = wrap((spot[1] - 0.6).atan2(spot[0] - 1.0) - heading);
+        assert!(err > p.turn_start, "{err}");
+        assert_eq!(Scripted::new(p).act(&o), Action::TurnLeft);
+        // ...where today's player walks on toward the ball.
+        let today = Scripted::new(ScriptedParams::default()).act(&o);
+        assert_eq!(today, Action::Forward);
+        // At its own set play it plays as today's team does.
+        o.set_play = Some(SetPlayObs {
+            kind: SetPlayKind::KickIn,
+            own: true,
+            ticks_left: 100,
+        });
+        assert_eq!(
+            Scripted::new(p).act(&o),
+            Scripted::new(ScriptedParams::default()).act(&o)
+        );
+    }
+
+    #[test]
+    fn around_a_circle_the_path_bends() {
+        // Straight through the ball: a waypoint on the circle instead.
+        let w = around([0.0, 0.0], [-2.0, 0.0], [2.0, 0.0], 0.7);
+        assert!((norm(w) - 2.0).abs() < 1e-5, "{w:?}");
+        // A clear path: the target itself.
+        assert_eq!(around([0.0, 0.0], [-2.0, 1.0], [2.0, 1.0], 0.7), [2.0, 1.0]);
     }
 
     #[test]

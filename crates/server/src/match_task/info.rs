@@ -2,19 +2,25 @@
 //! match id): its `MatchInfo`, first and as joins and leaves change it.
 
 use super::{MatchParams, MatchTask, Slot};
-use naosoccer_proto::msg::{MatchInfo, MatchState, PerTeam, Score};
+use naosoccer_proto::msg::{Fill, MatchInfo, MatchState, PerTeam, Score};
 use naosoccer_proto::{RobotId, PLAYERS_PER_TEAM};
 use naosoccer_referee::Match;
 
 impl MatchTask {
     /// The first `MatchInfo` of a match (before its task runs).
+    /// A level of the scripted ladder is reported as `fill: "scripted"`
+    /// and `fill_team: "scripted:N"` (values every client knows).
     pub(crate) fn initial_info(params: &MatchParams, game: &Match) -> MatchInfo {
+        let (fill, level) = match params.fill {
+            Fill::ScriptedLevel(n) => (Fill::Scripted, Some(format!("scripted:{n}"))),
+            f => (f, None),
+        };
         MatchInfo {
             match_id: params.id,
             state: MatchState::Waiting,
             mode: params.mode,
-            fill: params.fill,
-            fill_team: params.fill_team.clone(),
+            fill,
+            fill_team: params.fill_team.clone().or(level),
             seed: params.seed,
             control_hz: game.config().control_hz,
             tick: game.tick(),
