@@ -506,6 +506,8 @@ mod tests {
 
     /// A ladder of `n` teams where team i beats team j < i in `p(i - j)`
     /// of `m` matches and loses the rest.
+    // Both halves of the table are written at once: indices say it best.
+    #[allow(clippy::needless_range_loop)]
     fn ladder(n: usize, m: u32, p: impl Fn(usize) -> f64) -> Vec<Vec<f64>> {
         let mut wins = vec![vec![0u32; n]; n];
         for i in 0..n {
