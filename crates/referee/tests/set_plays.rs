@@ -31,6 +31,16 @@ fn clear_the_pitch(m: &mut Match, keep: &[usize]) {
     }
 }
 
+/// The first `set_play` event's kind, team and spot.
+fn first_award(events: &[Event]) -> Option<(SetPlayKind, Team, f32, f32)> {
+    events.iter().find_map(|e| match *e {
+        Event::SetPlay {
+            play, team, x, y, ..
+        } => Some((play, team, x, y)),
+        _ => None,
+    })
+}
+
 fn ball_xy(m: &Match) -> (f32, f32) {
     let b = m.sim().snapshot().ball.pos;
     (b[0], b[1])
@@ -95,15 +105,7 @@ fn a_goal_straight_from_the_kick_off_is_disallowed_and_restarts_with_a_goal_kick
     // A goal kick for red, the ball on the front corner of red's goal area.
     let (kind, team, _) = m.set_play().expect("a set play");
     assert_eq!((kind, team), (SetPlayKind::GoalKick, Team::Red));
-    let set_play = events
-        .iter()
-        .find_map(|e| match e {
-            Event::SetPlay {
-                play, team, x, y, ..
-            } => Some((*play, *team, *x, *y)),
-            _ => None,
-        })
-        .expect("a set_play event");
+    let set_play = first_award(&events).expect("a set_play event");
     assert_eq!(set_play.0, SetPlayKind::GoalKick);
     assert_eq!(set_play.1, Team::Red);
     assert!((set_play.2 - 2.4).abs() < 1e-5 && (set_play.3.abs() - 1.7).abs() < 1e-5);
@@ -248,15 +250,7 @@ fn the_ball_goes_exactly_on_its_spot_and_ball_out_set_play_and_observation_agree
             _ => None,
         })
         .expect("ball_out");
-    let award = events
-        .iter()
-        .find_map(|e| match e {
-            Event::SetPlay {
-                play, team, x, y, ..
-            } => Some((*play, *team, *x, *y)),
-            _ => None,
-        })
-        .expect("set_play");
+    let award = first_award(&events).expect("set_play");
     assert_eq!((award.0, award.1), (SetPlayKind::KickIn, Team::Red));
     // The documented spot: where it left, 5 cm inside the touch line.
     assert!((out.1 - 2.2).abs() < 1e-5, "{out:?}");
