@@ -6,6 +6,7 @@ use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::Instant;
 
+use anyhow::Context;
 use clap::Args;
 use naosoccer_learn::dqn::{DqnConfig, DqnPreset};
 use naosoccer_learn::ppo::{PpoConfig, Preset};
@@ -61,8 +62,23 @@ metrics.csv (one row per update), checkpoints/step-N.safetensors and
 final.safetensors. Play the result with `naosoccer eval --blue ppo:DIR` or
 `naosoccer client --policy ppo:DIR`. See docs/LEARNING.md.")]
 pub struct TrainArgs {
+    /// Run every stage of a training recipe (a TOML file, e.g.
+    /// assets/recipes/ppo-team.toml: each `[[stage]]` is a `train` command
+    /// written as fields) into --out with --seed; each stage gets its own
+    /// directory, `--resume DIR` continues the chain where it stopped, and
+    /// DIR/time.json holds the wall-clock time of the whole chain. The
+    /// finished team is `ppo:DIR`. Other options belong in the recipe.
+    #[arg(long, value_name = "FILE", conflicts_with_all = [
+        "algo", "steps", "resume", "preset", "persist", "no_shoot_mask", "pass_action",
+        "support_action", "support_hold", "support_roles", "support_only", "support_spot",
+        "approach_action", "approach_only", "init_from", "pass_init", "support_init_bias",
+        "central_critic", "minibatches", "entropy_coef", "gamma", "target_kl", "lr", "drill",
+        "pass_drills", "pass_drill_seconds", "pass_drill_angle", "obs_version", "opponent",
+        "matches", "threads", "torch_threads", "config", "minutes", "learners", "teammates",
+        "checkpoint_every", "rollout", "epochs", "shared", "n_step", "epsilon"])]
+    recipe: Option<PathBuf>,
     /// Algorithm: dqn (the paper's Algorithm 1) or ppo (Algorithm 2).
-    #[arg(long, required_unless_present = "resume")]
+    #[arg(long, required_unless_present_any = ["resume", "recipe"])]
     algo: Option<Algo>,
     /// Robot transitions to train for (one learning robot, one control
     /// tick); default 1000000. With --resume: the run's new total length.
@@ -274,6 +290,28 @@ pub struct TrainArgs {
 }
 
 pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
+    if let Some(recipe) = &a.recipe {
+        let out = a.out.as_ref().context("--recipe needs --out DIR")?;
+        return super::recipe::start(recipe, out, a.seed);
+    }
+    if let Some(dir) = a
+        .resume
+        .as_ref()
+        .filter(|d| super::recipe::is_recipe_run(d))
+    {
+        anyhow::ensure!(
+            a.steps.is_none(),
+            "{} is a recipe run: its stages' lengths are in its recipe.toml, not --steps",
+            dir.display()
+        );
+        return super::recipe::run(dir);
+    }
+    run_train(a, &mut || {})
+}
+
+/// One `train` run; `tick` is called with every progress report (a recipe
+/// keeps its time file with it).
+pub(crate) fn run_train(a: TrainArgs, tick: &mut dyn FnMut()) -> anyhow::Result<()> {
     tch::set_num_threads(a.torch_threads.max(1));
     let mcfg = match_config(a.config.as_ref(), a.minutes)?;
     let algo = a.algo.unwrap_or(Algo::Ppo);
@@ -408,6 +446,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     // from its checkpoint's count (taken from its first report).
     let mut first_seen: Option<u64> = a.resume.is_none().then_some(0);
     let mut show = |p: &naosoccer_learn::train::Progress<'_>| {
+        tick();
         let since = p.row.transitions - *first_seen.get_or_insert(p.row.transitions);
         if !p.row.episode_return.is_nan() {
             last_episodes = format!(

@@ -8,6 +8,8 @@ pub mod learn;
 #[cfg(not(feature = "train"))]
 pub mod not_built;
 pub mod play;
+#[cfg(feature = "train")]
+pub mod recipe;
 pub mod record;
 pub mod server;
 pub mod soak;

@@ -690,3 +690,141 @@ fn the_default_build_links_no_libtorch() {
         "the default build links libtorch:\n{libs}"
     );
 }
+
+/// `train --recipe`: both stages of a two-stage recipe run in one command
+/// (the second from the first's weights) and the team lands in the run
+/// directory with its time file; a run stopped between the stages and
+/// continued with `--resume` skips the finished stage and writes the same
+/// final weights; a second start on the same directory is refused, and a
+/// bad recipe is refused before anything is trained.
+#[cfg(feature = "train")]
+#[test]
+fn a_recipe_runs_every_stage_and_resumes_between_them() {
+    let recipe = dir("recipe_file").with_extension("toml");
+    std::fs::write(
+        &recipe,
+        r#"description = "two tiny stages"
+[[stage]]
+name = "first"
+algo = "ppo"
+preset = "team"
+minutes = 0.1
+steps = 2048
+matches = 4
+rollout = 32
+epochs = 2
+checkpoint-every = 1024
+[[stage]]
+name = "second"
+algo = "ppo"
+preset = "team"
+init-from = "previous"
+minutes = 0.1
+steps = 2048
+matches = 4
+rollout = 32
+epochs = 2
+lr = 0.0001
+checkpoint-every = 1024
+"#,
+    )
+    .unwrap();
+    let recipe_s = recipe.to_str().unwrap();
+    let whole = dir("recipe_whole");
+    let out = naosoccer(&[
+        "train",
+        "--recipe",
+        recipe_s,
+        "--out",
+        whole.to_str().unwrap(),
+        "--seed",
+        "5",
+    ]);
+    assert!(out.status.success(), "{}", common::text(&out));
+    for f in [
+        "recipe.toml",
+        "recipe-run.json",
+        "time.json",
+        "config.json",
+        "final.safetensors",
+        "01-first/final.safetensors",
+        "02-second/final.safetensors",
+    ] {
+        assert!(whole.join(f).exists(), "{f} written");
+    }
+    let second_cfg = std::fs::read_to_string(whole.join("02-second/config.json")).unwrap();
+    assert!(second_cfg.contains("01-first"), "{second_cfg}");
+    let time: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(whole.join("time.json")).unwrap()).unwrap();
+    assert_eq!(time["sittings"], 1);
+    assert_eq!(time["stages"].as_array().unwrap().len(), 2);
+    assert!(time["total_seconds"].as_f64().unwrap() > 0.0, "{time}");
+    let final_whole = std::fs::read(whole.join("final.safetensors")).unwrap();
+    assert_eq!(
+        final_whole,
+        std::fs::read(whole.join("02-second/final.safetensors")).unwrap()
+    );
+
+    // The same run stopped after its first stage, then continued.
+    let split = dir("recipe_split");
+    std::fs::create_dir_all(split.join("01-first")).unwrap();
+    for f in ["recipe.toml", "recipe-run.json"] {
+        std::fs::copy(whole.join(f), split.join(f)).unwrap();
+    }
+    for e in std::fs::read_dir(whole.join("01-first")).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_file() {
+            std::fs::copy(e.path(), split.join("01-first").join(e.file_name())).unwrap();
+        }
+    }
+    // The first stage's config names the directory it was trained in; the
+    // second stage starts from the split run's own first stage.
+    let out = naosoccer(&["train", "--resume", split.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", common::text(&out));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("stage 1/2 first: done"), "{err}");
+    assert!(err.contains("stage 2/2 second: starting"), "{err}");
+    assert_eq!(
+        std::fs::read(split.join("final.safetensors")).unwrap(),
+        final_whole,
+        "a recipe continued after a stop writes the same team"
+    );
+
+    let again = naosoccer(&[
+        "train",
+        "--recipe",
+        recipe_s,
+        "--out",
+        whole.to_str().unwrap(),
+    ]);
+    assert!(!again.status.success());
+    assert!(
+        common::text(&again).contains("already holds a recipe run"),
+        "{}",
+        common::text(&again)
+    );
+
+    let bad = dir("recipe_bad").with_extension("toml");
+    std::fs::write(
+        &bad,
+        "[[stage]]\nname = \"a\"\nalgo = \"ppo\"\ninit-from = \"assets/policies/ppo-team-seed1\"\n",
+    )
+    .unwrap();
+    let empty = dir("recipe_bad_out");
+    let out = naosoccer(&[
+        "train",
+        "--recipe",
+        bad.to_str().unwrap(),
+        "--out",
+        empty.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let text = common::text(&out);
+    assert!(
+        text.contains("init-from") && text.contains("from scratch"),
+        "{text}"
+    );
+    assert!(!empty.exists(), "nothing written for a bad recipe");
+    let out = naosoccer(&["train", "--recipe", recipe_s, "--steps", "5"]);
+    assert!(!out.status.success(), "options beside --recipe are refused");
+}
