@@ -329,24 +329,32 @@ impl VecMatches {
         } else {
             std::thread::scope(|s| {
                 let shape = &shape;
-                let handles: Vec<_> = self
+                let mut chunks = self
                     .slots
                     .chunks_mut(per)
                     .zip(out.obs.chunks_mut(per * rows * dim))
                     .zip(out.rewards.chunks_mut(per * rows))
                     .zip(out.terminated.chunks_mut(per))
                     .zip(out.masks.chunks_mut(per * rows * acts))
-                    .enumerate()
+                    .enumerate();
+                // This thread steps the first chunk itself: one spawn fewer
+                // per step, and it would only wait otherwise.
+                let (_, ((((slots, obs), rewards), term), masks)) =
+                    chunks.next().expect("at least one slot");
+                let handles: Vec<_> = chunks
                     .map(|(k, ((((slots, obs), rewards), term), masks))| {
                         s.spawn(move || {
                             step_chunk(shape, k * per, slots, obs, rewards, term, masks)
                         })
                     })
                     .collect();
-                handles
-                    .into_iter()
-                    .map(|h| h.join().expect("a stepping thread panicked"))
-                    .collect()
+                let mut results = vec![step_chunk(shape, 0, slots, obs, rewards, term, masks)];
+                results.extend(
+                    handles
+                        .into_iter()
+                        .map(|h| h.join().expect("a stepping thread panicked")),
+                );
+                results
             })
         };
         for r in results {
