@@ -1,5 +1,8 @@
-"""naosoccer: a pure-Python client for the naosoccer match server.
+"""naosoccer: the naosoccer simulator for Python.
 
+* :class:`VectorEnv`: many matches stepped in this process by the native
+  extension, as a Gymnasium vector env (numpy in and out).
+* :func:`binary_path`: the ``naosoccer`` binary the package carries.
 * :class:`Client`: the socket protocol (handshake, matches, join, actions).
 * :class:`NaoSoccerParallelEnv`: one team as a PettingZoo ``ParallelEnv``.
 * :class:`LocalServer`: ``naosoccer server`` as a subprocess on a free port.
@@ -24,12 +27,14 @@ from .obs import (
     team_rewards,
 )
 from .protocol import ACTIONS, PROTOCOL_VERSION
-from .server import LocalServer, find_binary
+from .server import LocalServer, binary_path, find_binary
+from .vector import ACTION_NAMES, VectorEnv, team_layout
 
 __version__ = "0.1.0"
 
 __all__ = [
     "ACTIONS",
+    "ACTION_NAMES",
     "Client",
     "FEATURE_NAMES",
     "FieldScale",
@@ -44,6 +49,9 @@ __all__ = [
     "ProtocolError",
     "RewardWeights",
     "ServerStartError",
+    "VectorEnv",
+    "binary_path",
     "find_binary",
+    "team_layout",
     "team_rewards",
 ]

@@ -28,10 +28,23 @@ _ADDR_RE = re.compile(r"^naosoccer server on (\S+):(\d+)\b")
 _TOKEN_RE = re.compile(r"^(blue|red|admin) token:\s*(\S+)\s*$")
 
 
+#: Where a wheel carries its ``naosoccer`` binary (scripts/wheel puts it there).
+_BUNDLED = Path(__file__).resolve().parent / "bin" / "naosoccer"
+
+
+def binary_path() -> Optional[str]:
+    """The ``naosoccer`` binary this package carries, or ``None`` when it
+    carries none (a checkout used in place, before scripts/wheel)."""
+    if _BUNDLED.is_file() and os.access(_BUNDLED, os.X_OK):
+        return str(_BUNDLED)
+    return None
+
+
 def find_binary(explicit: Optional[str] = None) -> str:
     """The ``naosoccer`` binary to run.
 
-    In order: ``explicit``; ``$NAOSOCCER_BIN``; the newer of
+    In order: ``explicit``; ``$NAOSOCCER_BIN``; the package's own
+    (:func:`binary_path`, in an installed wheel); the newer of
     ``target/release/naosoccer`` and ``target/debug/naosoccer`` in the
     repository this package lives in (or in the current directory or one of
     its parents); ``naosoccer`` on ``PATH``.
@@ -41,6 +54,9 @@ def find_binary(explicit: Optional[str] = None) -> str:
             if not (os.path.isfile(candidate) and os.access(candidate, os.X_OK)):
                 raise ServerStartError(f"naosoccer binary {candidate!r} does not exist or is not executable")
             return candidate
+    bundled = binary_path()
+    if bundled:
+        return bundled
     roots: List[Path] = [Path(__file__).resolve().parent.parent.parent]
     cwd = Path.cwd().resolve()
     roots += [cwd, *cwd.parents]

@@ -43,3 +43,9 @@ def test_sb3_ppo(binary):
 def test_bench_env(binary):
     text = run(binary, "bench_env.py", "--minutes", "0.2", "--matches", "1")
     assert "team steps/s" in text
+
+
+def test_bench_env_vector(binary):
+    pytest.importorskip("naosoccer._native", reason="the native extension is not built (scripts/wheel --in-place)")
+    text = run(binary, "bench_env.py", "--vector", "--num-matches", "2", "--seconds", "0.5", "--minutes", "0.1")
+    assert "match ticks/s" in text and "matches ended" in text

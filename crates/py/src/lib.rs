@@ -1,0 +1,208 @@
+//! `naosoccer._native`: the Python extension module. It moves numpy arrays
+//! in and out of [`vector::VecMatches`] and releases the GIL while the
+//! matches step; the Gymnasium conventions (spaces, infos, auto-reset
+//! bookkeeping) are in `python/naosoccer/vector.py`.
+
+pub mod vector;
+
+use std::sync::Mutex;
+
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use naosoccer_policy::DecisionConfig;
+use naosoccer_referee::MatchConfig;
+use vector::{Controlled, EnvSpec, Finished, StepOut, VecEnvError, VecMatches};
+
+fn value_error(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+impl From<VecEnvError> for PyErr {
+    fn from(e: VecEnvError) -> PyErr {
+        value_error(e)
+    }
+}
+
+/// N matches stepped in process, one control tick a step.
+///
+/// `VecMatches(num_matches, team, opponent, obs_version, decision_json,
+/// config_toml, minutes, threads)`; see `naosoccer.VectorEnv`, which wraps it.
+#[pyclass(module = "naosoccer._native", name = "VecMatches")]
+struct VecMatchesPy {
+    // Locked only by the thread that holds the Python object's borrow; the
+    // mutex makes the class shareable between Python threads.
+    inner: Mutex<VecMatches>,
+    shape: (usize, usize, usize, usize),
+}
+
+#[pymethods]
+impl VecMatchesPy {
+    #[new]
+    #[pyo3(signature = (num_matches, team, opponent, obs_version, decision_json=None, config_toml=None, minutes=None, threads=1))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        num_matches: usize,
+        team: &str,
+        opponent: &str,
+        obs_version: u32,
+        decision_json: Option<&str>,
+        config_toml: Option<&str>,
+        minutes: Option<f32>,
+        threads: usize,
+    ) -> PyResult<Self> {
+        let mut config = match config_toml {
+            Some(t) => MatchConfig::from_toml_str(t).map_err(value_error)?,
+            None => MatchConfig::default(),
+        };
+        if let Some(m) = minutes {
+            config.minutes = m;
+        }
+        let decision = match decision_json {
+            Some(j) => Some(
+                serde_json::from_str::<DecisionConfig>(j)
+                    .map_err(|e| value_error(format!("decision: {e}")))?,
+            ),
+            None => None,
+        };
+        let env = VecMatches::new(EnvSpec {
+            matches: num_matches,
+            controlled: Controlled::parse(team)?,
+            opponent: opponent.to_string(),
+            config,
+            obs_version,
+            decision,
+            threads,
+        })?;
+        let shape = (
+            env.num_matches(),
+            env.robots(),
+            env.obs_dim(),
+            env.actions(),
+        );
+        Ok(VecMatchesPy {
+            inner: Mutex::new(env),
+            shape,
+        })
+    }
+
+    /// (matches, robots per match, observation length, actions).
+    #[getter]
+    fn shape(&self) -> (usize, usize, usize, usize) {
+        self.shape
+    }
+
+    /// Starts every slot's first match (slot `i`: seed `seed + i`); returns
+    /// `(obs, masks)`.
+    fn reset<'py>(&self, py: Python<'py>, seed: u64) -> PyResult<Bound<'py, PyAny>> {
+        let inner = &self.inner;
+        let out = py.detach(|| lock(inner).reset(seed))?;
+        let (n, r, d, a) = self.shape;
+        let obs = PyArray1::from_vec(py, out.obs).reshape([n, r, d])?;
+        let masks = PyArray1::from_vec(py, out.masks).reshape([n, r, a])?;
+        Ok((obs, masks).into_pyobject(py)?.into_any())
+    }
+
+    /// One control tick of every match. `actions`: int64, one per
+    /// controlled robot, slot-major. Returns `(obs, rewards, terminated,
+    /// masks, finished)`, `finished` a list of dicts for the matches that
+    /// ended (already restarted: `obs` and `masks` are the new match's).
+    fn step<'py>(
+        &self,
+        py: Python<'py>,
+        actions: PyReadonlyArray1<'py, i64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let acts = actions.as_slice().map_err(value_error)?.to_vec();
+        drop(actions);
+        let inner = &self.inner;
+        let out: StepOut = py.detach(|| lock(inner).step(&acts))?;
+        let (n, r, d, a) = self.shape;
+        let obs = PyArray1::from_vec(py, out.obs).reshape([n, r, d])?;
+        let rewards = PyArray1::from_vec(py, out.rewards).reshape([n, r])?;
+        let terminated = PyArray1::from_vec(py, out.terminated);
+        let masks = PyArray1::from_vec(py, out.masks).reshape([n, r, a])?;
+        let finished = PyList::empty(py);
+        for f in out.finished {
+            finished.append(finished_dict(py, f, (r, d))?)?;
+        }
+        Ok((obs, rewards, terminated, masks, finished)
+            .into_pyobject(py)?
+            .into_any())
+    }
+
+    /// Each slot's current match seed.
+    fn seeds(&self) -> Vec<u64> {
+        lock(&self.inner).seeds()
+    }
+
+    /// Each slot's current tick.
+    fn ticks(&self) -> Vec<u64> {
+        lock(&self.inner).ticks()
+    }
+
+    /// Each slot's current score as (blue, red).
+    fn scores(&self) -> Vec<(u32, u32)> {
+        lock(&self.inner)
+            .scores()
+            .into_iter()
+            .map(|s| (s.blue, s.red))
+            .collect()
+    }
+
+    /// Each slot's current state hash.
+    fn state_hashes(&self) -> Vec<u64> {
+        lock(&self.inner).state_hashes()
+    }
+}
+
+fn lock(m: &Mutex<VecMatches>) -> std::sync::MutexGuard<'_, VecMatches> {
+    // A panic while stepping poisons the lock; the matches are then in an
+    // unknown state, and the next call says so by panicking too.
+    m.lock().expect("a previous step panicked")
+}
+
+fn finished_dict<'py>(
+    py: Python<'py>,
+    f: Finished,
+    (r, d): (usize, usize),
+) -> PyResult<Bound<'py, PyDict>> {
+    let dict = PyDict::new(py);
+    dict.set_item("slot", f.slot)?;
+    dict.set_item("seed", f.seed)?;
+    dict.set_item("ticks", f.ticks)?;
+    let score = PyDict::new(py);
+    score.set_item("blue", f.score.blue)?;
+    score.set_item("red", f.score.red)?;
+    dict.set_item("score", score)?;
+    let stats = PyDict::new(py);
+    for (name, t) in [("blue", &f.stats.blue), ("red", &f.stats.red)] {
+        let s = PyDict::new(py);
+        s.set_item("goals", t.goals)?;
+        s.set_item("control_rate", t.control_rate)?;
+        s.set_item("passes", t.passes)?;
+        s.set_item("shots", t.shots)?;
+        s.set_item("falls", t.falls)?;
+        s.set_item("out_of_bounds", t.out_of_bounds)?;
+        stats.set_item(name, s)?;
+    }
+    dict.set_item("stats", stats)?;
+    dict.set_item("state_hash", format!("{:016x}", f.state_hash))?;
+    dict.set_item("obs", PyArray1::from_vec(py, f.obs).reshape([r, d])?)?;
+    Ok(dict)
+}
+
+/// The extension module.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<VecMatchesPy>()?;
+    m.add("OBS_VERSION", naosoccer_policy::OBS_VERSION)?;
+    m.add("OBS_VERSION_LATEST", naosoccer_policy::OBS_VERSION_LATEST)?;
+    m.add(
+        "ACTION_NAMES",
+        naosoccer_policy::actions::ACTION_NAMES.to_vec(),
+    )?;
+    m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,151 @@
+"""The in-process vector env (``naosoccer.VectorEnv``, the native extension):
+spaces and shapes, the same matches as ``naosoccer match`` (state hash for
+state hash), auto-reset in the same step, action masks, opponents."""
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+pytest.importorskip("naosoccer._native", reason="the native extension is not built (scripts/wheel --in-place)")
+
+from naosoccer import VectorEnv  # noqa: E402
+
+TEAM = "assets/policies/ppo-team-seed1"
+STAY = 4
+
+
+def cli_match(binary, seed, minutes, blue, red):
+    out = subprocess.run(
+        [binary, "match", "--seed", str(seed), "--minutes", str(minutes), "--blue", blue, "--red", red, "--json"],
+        check=True, capture_output=True, text=True,
+    )
+    return json.loads(out.stdout)
+
+
+def play_to_end(env, action):
+    """Steps until every slot's first match ended; the final infos by slot."""
+    finals = {}
+    steps = 0
+    while len(finals) < env.num_envs:
+        _, rewards, term, trunc, infos = env.step(np.full((env.num_envs, env.robots), action))
+        assert rewards.shape == (env.num_envs, env.robots) and not trunc.any()
+        steps += 1
+        for i in np.flatnonzero(term):
+            assert infos["_final_info"][i] and infos["_final_obs"][i]
+            finals.setdefault(int(i), {
+                "state_hash": infos["final_info"]["state_hash"][i],
+                "seed": int(infos["final_info"]["seed"][i]),
+                "ticks": int(infos["final_info"]["ticks"][i]),
+                "score": (int(infos["final_info"]["score"]["blue"][i]), int(infos["final_info"]["score"]["red"][i])),
+                "final_obs": infos["final_obs"][i],
+            })
+    return finals, steps
+
+
+def test_spaces_and_shapes():
+    env = VectorEnv(3, opponent="idle", minutes=0.1, seed=1)
+    obs, infos = env.reset()
+    assert obs.shape == (3, 4, 75) and obs.dtype == np.float32
+    assert env.single_observation_space.shape == (4, 75)
+    assert env.observation_space.shape == (3, 4, 75)
+    assert list(env.single_action_space.nvec) == [5] * 4
+    assert env.action_space.shape == (3, 4)
+    assert infos["action_mask"].shape == (3, 4, 5) and infos["action_mask"].all()
+    assert env.agents == ["blue_0", "blue_1", "blue_2", "blue_3"]
+    assert env.observation_space.contains(obs)
+    both = VectorEnv(2, team="both", minutes=0.1, obs_version=1)
+    obs, infos = both.reset(seed=3)
+    assert obs.shape == (2, 8, 48) and both.agents[4] == "red_0"
+
+
+@pytest.mark.parametrize("team,opponent", [("blue", "scripted"), ("red", "scripted"), ("blue", "random")])
+def test_matches_are_naosoccer_match(binary, team, opponent):
+    # Robots that always stay play as `idle` does: the same match as the
+    # CLI's, bit for bit, for every slot's seed.
+    env = VectorEnv(2, team=team, opponent=opponent, minutes=0.2, seed=11)
+    env.reset()
+    finals, steps = play_to_end(env, STAY)
+    assert steps == 120
+    for i in range(2):
+        blue, red = ("idle", opponent) if team == "blue" else (opponent, "idle")
+        cli = cli_match(binary, 11 + i, 0.2, blue, red)
+        assert finals[i]["seed"] == 11 + i
+        assert finals[i]["state_hash"] == cli["state_hash"], (team, opponent, i)
+        assert finals[i]["score"] == (cli["score"]["blue"], cli["score"]["red"])
+        assert finals[i]["ticks"] == cli["ticks"]
+
+
+def test_finished_matches_restart_in_the_same_step():
+    env = VectorEnv(2, opponent="scripted", minutes=0.1, seed=5)
+    env.reset()
+    finals, _ = play_to_end(env, 0)
+    # Each slot's next match: seed + slot + num_matches, at its kick-off,
+    # the observation a fresh reset with that seed gives.
+    assert env.seeds() == [7, 8] and env.ticks() == [0, 0]
+    obs, _, _, _, _ = env.step(np.full((2, 4), STAY))
+    fresh = VectorEnv(2, opponent="scripted", minutes=0.1)
+    obs0, _ = fresh.reset(seed=7)
+    after, _, _, _, _ = fresh.step(np.full((2, 4), STAY))
+    np.testing.assert_array_equal(obs[0], after[0])
+    assert finals[0]["final_obs"].shape == (4, 75)
+
+
+def test_same_seed_same_steps():
+    runs = []
+    for _ in range(2):
+        env = VectorEnv(2, opponent="random", minutes=0.1, seed=9)
+        obs, _ = env.reset()
+        rng = np.random.default_rng(0)
+        trace = [obs]
+        for _ in range(40):
+            obs, r, *_ = env.step(rng.integers(0, 5, size=(2, 4)))
+            trace += [obs, r]
+        runs.append(trace)
+    for a, b in zip(*runs):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_masks_follow_a_shipped_teams_actions():
+    env = VectorEnv(2, like=TEAM, opponent="idle", minutes=0.1, seed=2)
+    assert env.obs_version == 3 and env.num_actions == 7
+    assert env.action_names == ("forward", "turn_left", "turn_right", "shoot", "stay", "pass", "support")
+    obs, infos = env.reset()
+    assert obs.shape == (2, 4, 89)
+    mask = infos["action_mask"]
+    # At kick-off nobody has the ball in reach: no shoot, no pass; support
+    # and stay always; the two robots farthest from the ball may not walk
+    # or turn (the team's two chasers may).
+    assert not mask[..., 3].any() and not mask[..., 5].any()
+    assert mask[..., 4].all() and mask[..., 6].all()
+    assert (mask[..., 0].sum(axis=1) == 2).all()
+    rng = np.random.default_rng(1)
+    for _ in range(30):
+        # Random actions among the allowed ones.
+        logits = np.where(mask, rng.random(mask.shape), -1.0)
+        _, _, _, _, infos = env.step(logits.argmax(-1))
+        mask = infos["action_mask"]
+        assert mask.any(axis=-1).all()
+
+
+def test_a_trained_opponent_plays():
+    env = VectorEnv(2, opponent=f"ppo:{TEAM}", minutes=0.1, seed=4)
+    env.reset()
+    finals, _ = play_to_end(env, STAY)
+    assert set(finals) == {0, 1}
+
+
+def test_bad_arguments_are_refused():
+    with pytest.raises(ValueError, match="team"):
+        VectorEnv(1, team="green")
+    with pytest.raises(ValueError, match="unknown policy"):
+        VectorEnv(1, opponent="scripted-ish")
+    with pytest.raises(ValueError, match="obs_version"):
+        VectorEnv(1, obs_version=9)
+    env = VectorEnv(2, opponent="idle", minutes=0.1)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="not one of the 5 actions"):
+        env.step(np.full((2, 4), 5))
+    with pytest.raises(ValueError, match="expected 8 actions"):
+        env.step(np.zeros(7, dtype=np.int64))
