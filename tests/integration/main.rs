@@ -13,6 +13,9 @@ mod eval_blocks;
 mod league_cli;
 mod learn_cli;
 mod learn_client;
+// Pinned training bytes (issue 41): the runs need libtorch.
+#[cfg(feature = "train")]
+mod learn_pins;
 mod learn_shipped;
 mod live;
 mod match_cli;
