@@ -108,7 +108,7 @@ pub struct TrainConfig {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub init_pass_from: Option<naosoccer_proto::Action>,
     /// With `init_from`: how much lower (in logits) a gained `support`
-    /// row's bias starts than `forward`'s ([`crate::train::SUPPORT_INIT_BIAS`]
+    /// row's bias starts than `forward`'s ([`crate::warm_start::SUPPORT_INIT_BIAS`]
     /// when unset; 0 starts `support` as likely as `forward`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub init_support_bias: Option<f32>,

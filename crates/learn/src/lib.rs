@@ -30,9 +30,11 @@ pub mod nets;
 pub mod plot;
 pub mod policy;
 pub mod ppo;
+pub mod run;
 pub mod schedule;
 pub mod schedule_runner;
 pub mod train;
+pub mod warm_start;
 
 pub use config::{Algo, OpponentSpec, TrainConfig};
 pub use error::LearnError;

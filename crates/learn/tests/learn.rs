@@ -1221,7 +1221,7 @@ fn actor_logits(p: &naosoccer_learn::ppo::Ppo, rows: &[f32], n: usize) -> Vec<f3
 #[test]
 fn init_from_widens_the_actor_for_the_pass_action() {
     use naosoccer_learn::ppo::{Ppo, PASS, SHOOT};
-    use naosoccer_learn::train::{init_weights, SUPPORT_INIT_BIAS};
+    use naosoccer_learn::warm_start::{init_weights, SUPPORT_INIT_BIAS};
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
     let [five, six, ..] = widening_configs();
@@ -1305,7 +1305,7 @@ fn init_from_widens_the_actor_for_the_pass_action() {
 #[test]
 fn init_from_widens_the_actor_for_the_support_action() {
     use naosoccer_learn::ppo::{Ppo, PpoConfig, Preset, PASS, SHOOT};
-    use naosoccer_learn::train::{init_weights, SUPPORT_INIT_BIAS};
+    use naosoccer_learn::warm_start::{init_weights, SUPPORT_INIT_BIAS};
     use naosoccer_policy::SUPPORT;
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
@@ -1368,7 +1368,7 @@ fn init_from_widens_the_actor_for_the_support_action() {
 #[test]
 fn init_from_widens_the_actor_for_the_approach_action() {
     use naosoccer_learn::ppo::Ppo;
-    use naosoccer_learn::train::init_weights;
+    use naosoccer_learn::warm_start::init_weights;
     use naosoccer_policy::{APPROACH, SUPPORT};
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
