@@ -23,6 +23,7 @@
 
 pub mod adam;
 pub mod config;
+pub mod decisions;
 pub mod dqn;
 pub mod env;
 mod error;

@@ -25,6 +25,7 @@ use tch::nn::{self, OptimizerConfig};
 use tch::{Kind, Tensor};
 
 use crate::adam::Adam;
+use crate::decisions::{Closed, End};
 use crate::nets::{Activation, InitScheme, Mlp};
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
@@ -833,7 +834,47 @@ pub struct Transitions {
     pub next: Vec<Option<usize>>,
 }
 
+/// What PPO keeps of a decision until it closes: the action's
+/// log-probability and the critic's value where it was taken.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Act {
+    pub logp: f32,
+    pub value: f32,
+}
+
 impl Transitions {
+    /// Stores a closed decision with the value after it (`next_value`) and
+    /// whether its episode ended there. `link` holds each robot's last
+    /// transition while its stream goes on (it ended in the next decision):
+    /// this one becomes that one's successor.
+    pub fn push(
+        &mut self,
+        c: &Closed<'_, Act>,
+        next_value: f32,
+        done: bool,
+        link: &mut [Option<usize>],
+    ) {
+        let i = self.len();
+        self.obs.extend_from_slice(c.obs);
+        self.critic_obs.extend_from_slice(c.critic_obs);
+        self.actions.push(c.action as i64);
+        self.logp.push(c.payload.logp);
+        self.shoot_ok.push(c.shoot_ok);
+        self.banned.push(c.banned);
+        self.values.push(c.payload.value);
+        self.rewards.push(c.reward);
+        self.dt.push(c.ticks.max(1));
+        self.next_values.push(next_value);
+        self.dones.push(done);
+        self.next.push(None);
+        if let Some(j) = link[c.row].take() {
+            self.next[j] = Some(i);
+        }
+        if matches!(c.end, End::Decided { .. }) {
+            link[c.row] = Some(i);
+        }
+    }
+
     pub fn len(&self) -> usize {
         self.actions.len()
     }

@@ -7,11 +7,12 @@ use std::path::Path;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use crate::decisions::{critic_row, Decisions, End};
 use crate::dqn::{epsilon_greedy, Dqn, NStep};
 use crate::env::{Opponent, VecEnv};
 use crate::obs::OBS_DIM;
-use crate::policy::{save_stores, Hold};
-use crate::ppo::{Ppo, Rollout, Transitions, ACTIONS};
+use crate::policy::save_stores;
+use crate::ppo::{Act, Ppo, Rollout, Transitions, ACTIONS};
 use crate::run::{
     checkpoint_due, make_env, resume_point, set_self_play, snapshot_due, start_schedule,
     write_checkpoint, MetricsRow, Progress, ResumeState, RunDir, Tally, TrainSummary,
@@ -19,7 +20,6 @@ use crate::run::{
 use crate::schedule_runner::ScheduleRunner;
 use crate::warm_start::{init_weights, SUPPORT_INIT_BIAS};
 use crate::LearnError;
-use naosoccer_policy::actions::banned_actions;
 
 // The configuration and the self-play snapshot live where the modules that
 // read them can reach them without importing the training loops; these are
@@ -141,26 +141,6 @@ fn train_ppo(
     })
 }
 
-/// The open transition of one learning robot: from its last decision until
-/// its next (decision-level MDP).
-#[derive(Debug, Clone, Copy, Default)]
-struct Pending {
-    open: bool,
-    action: usize,
-    logp: f32,
-    value: f32,
-    shoot_ok: bool,
-    /// [`banned_actions`] at the decision.
-    banned: u8,
-    /// `sum gamma^i r_i` so far, and `gamma^elapsed`.
-    reward: f32,
-    discount: f32,
-    elapsed: u32,
-    /// The closed transition that leads into this one (same robot, same
-    /// episode, same rollout).
-    prev: Option<usize>,
-}
-
 /// The decision-level PPO loop (`team` preset): every tick each learning
 /// robot either decides (free to act, persistence run out: a forward pass,
 /// its open transition closes with the new decision's value) or holds its
@@ -179,7 +159,6 @@ fn train_ppo_decisions(
         .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
     let mut env = make_env(cfg)?;
     let scale = run_scale(cfg);
-    let half = [scale.half_length, scale.half_width];
     let l = cfg.learners.len();
     let mut ppo = Ppo::new(cfg.ppo.clone(), &scale, l)?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
@@ -235,22 +214,16 @@ fn train_ppo_decisions(
         }
     };
     let rows = env.rows();
-    let gamma = cfg.ppo.gamma as f32;
     let cw = ppo.net.critic_dim;
+    let mut dec = Decisions::<Act>::new(&env, decision, scale, cw, cfg.ppo.gamma as f32);
     let mut tr = Transitions::default();
-    let mut holds = vec![Hold::default(); rows];
-    let mut pend = vec![Pending::default(); rows];
-    let mut pend_obs = vec![0.0f32; rows * OBS_DIM];
-    let mut pend_cobs = vec![0.0f32; rows * cw];
-    let mut actions = vec![0usize; rows];
-    // Scratch for the deciding rows of a tick.
-    let (mut dec_rows, mut dec_obs, mut dec_cobs, mut dec_ok) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // Each robot's last transition, while the next one of its stream (the
+    // decision that followed) is open.
+    let mut link: Vec<Option<usize>> = vec![None; rows];
     let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
-    // What each deciding robot may not choose beyond a `shoot` out of
-    // reach (`pass` without a receiver, roles; nothing without them).
-    let mut dec_banned = Vec::new();
+    let mut acts = Vec::new();
     let (mut cut_rows, mut cut_cobs, mut cut_val) = (Vec::new(), Vec::new(), Vec::new());
+    let mut boot = vec![0.0f32; rows];
     let mut out_rows = Vec::new();
     let mut last_checkpoint = transitions;
     while transitions < cfg.steps {
@@ -262,65 +235,34 @@ fn train_ppo_decisions(
         let mut boundary = false;
         while ticks < cfg.ppo.rollout && !boundary {
             ticks += 1;
-            dec_rows.clear();
-            dec_obs.clear();
-            dec_cobs.clear();
-            dec_ok.clear();
-            dec_banned.clear();
-            for (r, hold) in holds.iter_mut().enumerate() {
-                let o = env.learner_observation(r);
-                if hold.must_decide(o) {
-                    dec_rows.push(r);
-                    dec_obs.extend_from_slice(&env.observations()[r * OBS_DIM..(r + 1) * OBS_DIM]);
-                    push_critic_row(env.observations(), l, r, scale.dim(), cw, &mut dec_cobs);
-                    dec_ok.push(!cfg.ppo.masks_shoot() || scale.kick.in_reach(o));
-                    dec_banned.push(banned_actions(o, scale.kick.in_reach(o), &decision));
-                } else {
-                    actions[r] = hold.held(o);
-                }
-            }
-            let k = dec_rows.len();
+            let asked = dec.ask(&env);
+            let k = asked.rows.len();
             dec_act.resize(k, 0);
             dec_logp.resize(k, 0.0);
             dec_val.resize(k, 0.0);
             ppo.act_masked(
-                &dec_obs,
-                &dec_ok,
-                &dec_banned,
+                &asked.obs,
+                &asked.shoot_ok,
+                &asked.banned,
                 &mut rng,
                 &mut dec_act,
                 &mut dec_logp,
             );
-            ppo.critic_values(&dec_cobs, &mut dec_val);
-            for (j, &r) in dec_rows.iter().enumerate() {
-                let prev = close_pending(
-                    &mut tr,
-                    &mut pend[r],
-                    &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
-                    &pend_cobs[r * cw..(r + 1) * cw],
-                    dec_val[j],
-                    false,
-                );
-                pend[r] = Pending {
-                    open: true,
-                    action: dec_act[j],
-                    logp: dec_logp[j],
-                    value: dec_val[j],
-                    shoot_ok: dec_ok[j],
-                    banned: dec_banned[j],
-                    reward: 0.0,
-                    discount: 1.0,
-                    elapsed: 0,
-                    prev,
+            ppo.critic_values(&asked.critic_obs, &mut dec_val);
+            acts.clear();
+            acts.extend(
+                dec_logp
+                    .iter()
+                    .zip(&dec_val)
+                    .map(|(&logp, &value)| Act { logp, value }),
+            );
+            dec.decide(&env, &dec_act, &acts, &mut |c| {
+                let End::Decided { next, .. } = c.end else {
+                    unreachable!("a decision closes here only by the next one")
                 };
-                pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM]
-                    .copy_from_slice(&dec_obs[j * OBS_DIM..(j + 1) * OBS_DIM]);
-                pend_cobs[r * cw..(r + 1) * cw].copy_from_slice(&dec_cobs[j * cw..(j + 1) * cw]);
-                let tick = env.learner_observation(r).tick;
-                holds[r].start(dec_act[j], tick, &decision, half);
-                actions[r] = dec_act[j];
-            }
-            let finished = env.step(&actions)?;
+                tr.push(&c, dec_val[next], false, &mut link);
+            });
+            let finished = env.step(dec.actions())?;
             // Episodes cut short (pass drills) are bootstrapped with the
             // critic's value of the state where they were cut.
             cut_rows.clear();
@@ -328,7 +270,7 @@ fn train_ppo_decisions(
             for r in 0..rows {
                 if env.truncated()[r] {
                     cut_rows.push(r);
-                    push_critic_row(
+                    critic_row(
                         env.final_observations(),
                         l,
                         r,
@@ -342,26 +284,13 @@ fn train_ppo_decisions(
             if !cut_rows.is_empty() {
                 ppo.critic_values(&cut_cobs, &mut cut_val);
             }
-            let mut cut = cut_rows.iter().zip(&cut_val).peekable();
-            for (r, p) in pend.iter_mut().enumerate() {
-                if p.open {
-                    p.reward += p.discount * env.rewards()[r];
-                    p.discount *= gamma;
-                    p.elapsed += 1;
-                }
-                if env.dones()[r] {
-                    let bootstrap = cut.next_if(|(&c, _)| c == r).map(|(_, &v)| v);
-                    close_pending(
-                        &mut tr,
-                        p,
-                        &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
-                        &pend_cobs[r * cw..(r + 1) * cw],
-                        bootstrap.unwrap_or(0.0),
-                        bootstrap.is_none(),
-                    );
-                    holds[r].reset();
-                }
+            for (&r, &v) in cut_rows.iter().zip(&cut_val) {
+                boot[r] = v;
             }
+            dec.observe(&env, &mut |c| match c.end {
+                End::Cut => tr.push(&c, boot[c.row], false, &mut link),
+                _ => tr.push(&c, 0.0, true, &mut link),
+            });
             tally.add_rewards(env.rewards());
             tally.episodes.extend(finished);
             boundary = env.dones().iter().all(|&d| d);
@@ -370,21 +299,11 @@ fn train_ppo_decisions(
         // the critic's value of the state they reached.
         let mut edge_cobs = Vec::with_capacity(rows * cw);
         for r in 0..rows {
-            push_critic_row(env.observations(), l, r, scale.dim(), cw, &mut edge_cobs);
+            critic_row(env.observations(), l, r, scale.dim(), cw, &mut edge_cobs);
         }
         let mut edge_val = vec![0.0f32; rows];
         ppo.critic_values(&edge_cobs, &mut edge_val);
-        for r in 0..rows {
-            close_pending(
-                &mut tr,
-                &mut pend[r],
-                &pend_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
-                &pend_cobs[r * cw..(r + 1) * cw],
-                edge_val[r],
-                false,
-            );
-            pend[r].prev = None;
-        }
+        dec.cut(&mut |c| tr.push(&c, edge_val[c.row], false, &mut link));
         let before = transitions;
         transitions += (ticks * rows) as u64;
         let stats = ppo.update_decisions(&tr, before as f64 / cfg.steps.max(1) as f64, &mut rng);
@@ -434,67 +353,6 @@ fn train_ppo_decisions(
         transitions,
         final_weights,
     })
-}
-
-/// Closes `p` (if open) into `tr` with the value `next_value` after it;
-/// returns the closed transition's index when the robot's stream goes on
-/// from it (not at an episode's end).
-fn close_pending(
-    tr: &mut Transitions,
-    p: &mut Pending,
-    obs: &[f32],
-    cobs: &[f32],
-    next_value: f32,
-    done: bool,
-) -> Option<usize> {
-    if !p.open {
-        return None;
-    }
-    let i = tr.len();
-    tr.obs.extend_from_slice(obs);
-    tr.critic_obs.extend_from_slice(cobs);
-    tr.actions.push(p.action as i64);
-    tr.logp.push(p.logp);
-    tr.shoot_ok.push(p.shoot_ok);
-    tr.banned.push(p.banned);
-    tr.values.push(p.value);
-    tr.rewards.push(p.reward);
-    tr.dt.push(p.elapsed.max(1));
-    tr.next_values.push(next_value);
-    tr.dones.push(done);
-    tr.next.push(None);
-    if let Some(j) = p.prev {
-        tr.next[j] = Some(i);
-    }
-    p.open = false;
-    p.prev = None;
-    (!done).then_some(i)
-}
-
-/// Appends row `r`'s critic input: its own observation vector (the layout's
-/// `dim` entries), then, with a centralised critic (`cw` > `dim`), those of
-/// the other learning robots of its match in order.
-fn push_critic_row(feats: &[f32], l: usize, r: usize, dim: usize, cw: usize, out: &mut Vec<f32>) {
-    let row = |i: usize| &feats[i * OBS_DIM..i * OBS_DIM + dim];
-    out.extend_from_slice(row(r));
-    if cw > dim {
-        let base = r / l * l;
-        for k in 0..l {
-            if base + k != r {
-                out.extend_from_slice(row(base + k));
-            }
-        }
-    }
-}
-
-/// One robot's decision in progress (decision-level DQN).
-#[derive(Debug, Clone, Copy, Default)]
-struct OpenDecision {
-    open: bool,
-    action: usize,
-    /// `sum gamma^i r_i` so far, and `gamma^elapsed`.
-    reward: f32,
-    discount: f32,
 }
 
 /// What both DQN loops keep between vectorised steps: the counters, the
@@ -599,92 +457,56 @@ fn train_dqn_decisions(
     let mut env = make_env(cfg)?;
     let mut run = RunDir::create(out, cfg)?;
     let scale = run_scale(cfg);
-    let half = [scale.half_length, scale.half_width];
     let robots = cfg.learners.len();
     let mut dqn = Dqn::new(cfg.dqn.clone(), robots, run_scale(cfg).dim())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let rows = env.rows();
     let mut tally = Tally::new(robots);
-    let mut actions = vec![0usize; rows];
-    let mut holds = vec![Hold::default(); rows];
-    let mut open = vec![OpenDecision::default(); rows];
-    let mut open_obs = vec![0.0f32; rows * OBS_DIM];
-    let mut deciding = vec![false; rows];
-    let mut shoot_ok = vec![true; rows];
+    let mut dec = Decisions::<()>::new(&env, decision, scale, 0, cfg.dqn.discount(1));
     let mut q = Vec::new();
+    let mut chosen = Vec::new();
     let mut nstep = NStep::new(cfg.dqn.n_step, rows);
-    let gamma = cfg.dqn.discount(1);
     let mut log = DqnLog::default();
     while log.transitions < cfg.steps {
-        let mut any = false;
-        for r in 0..rows {
-            let o = env.learner_observation(r);
-            shoot_ok[r] = !decision.mask_shoot || scale.kick.in_reach(o);
-            deciding[r] = holds[r].must_decide(o);
-            if !deciding[r] {
-                actions[r] = holds[r].held(o);
-            }
-            any |= deciding[r];
-        }
+        let asked = dec.ask(&env);
+        let any = !asked.rows.is_empty();
         if any {
             let obs = env.observations();
             dqn.q_values(obs, robots, &mut q);
             let epsilon = cfg.dqn.epsilon_at(log.transitions);
-            for r in (0..rows).filter(|&r| deciding[r]) {
-                let row = &obs[r * OBS_DIM..(r + 1) * OBS_DIM];
+            chosen.clear();
+            for (&r, &ok) in asked.rows.iter().zip(&asked.shoot_ok) {
+                let q = &q[r * ACTIONS..(r + 1) * ACTIONS];
+                chosen.push(epsilon_greedy(q, ok, epsilon, &mut rng));
+            }
+            let none = vec![(); chosen.len()];
+            dec.decide(&env, &chosen, &none, &mut |c| {
                 // The decision that ran until now ends in this state.
-                let d = open[r];
-                if d.open {
-                    let ok = shoot_ok[r];
-                    nstep.push(
-                        r,
-                        &open_obs[r * OBS_DIM..(r + 1) * OBS_DIM],
-                        d.action,
-                        d.reward,
-                        d.discount,
-                        false,
-                        &mut |t| {
-                            dqn.remember(r % robots, t.obs, t.action, t.ret, row, t.discount, ok)
-                        },
-                    );
-                }
-                let a = epsilon_greedy(
-                    &q[r * ACTIONS..(r + 1) * ACTIONS],
-                    shoot_ok[r],
-                    epsilon,
-                    &mut rng,
-                );
-                open[r] = OpenDecision {
-                    open: true,
-                    action: a,
-                    reward: 0.0,
-                    discount: 1.0,
+                let End::Decided { shoot_ok, .. } = c.end else {
+                    unreachable!("a decision closes here only by the next one")
                 };
-                open_obs[r * OBS_DIM..(r + 1) * OBS_DIM].copy_from_slice(row);
-                holds[r].start(a, env.learner_observation(r).tick, &decision, half);
-                actions[r] = a;
-            }
+                let (r, next) = (c.row, &obs[c.row * OBS_DIM..(c.row + 1) * OBS_DIM]);
+                nstep.push(r, c.obs, c.action, c.reward, c.discount, false, &mut |t| {
+                    dqn.remember(
+                        r % robots,
+                        t.obs,
+                        t.action,
+                        t.ret,
+                        next,
+                        t.discount,
+                        shoot_ok,
+                    )
+                });
+            });
         }
-        let finished = env.step(&actions)?;
-        for r in 0..rows {
-            let d = &mut open[r];
-            if d.open {
-                d.reward += d.discount * env.rewards()[r];
-                d.discount *= gamma;
-            }
-            if env.dones()[r] {
-                if d.open {
-                    let d = *d;
-                    // Terminal: the next observation is never bootstrapped from.
-                    let row = &open_obs[r * OBS_DIM..(r + 1) * OBS_DIM];
-                    nstep.push(r, row, d.action, d.reward, d.discount, true, &mut |t| {
-                        dqn.remember(r % robots, t.obs, t.action, t.ret, row, t.discount, true)
-                    });
-                }
-                open[r].open = false;
-                holds[r].reset();
-            }
-        }
+        let finished = env.step(dec.actions())?;
+        dec.observe(&env, &mut |c| {
+            // Terminal: the next observation is never bootstrapped from.
+            let r = c.row;
+            nstep.push(r, c.obs, c.action, c.reward, c.discount, true, &mut |t| {
+                dqn.remember(r % robots, t.obs, t.action, t.ret, c.obs, t.discount, true)
+            });
+        });
         tally.add_rewards(env.rewards());
         tally.episodes.extend(finished);
         if any {
