@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use naosoccer_learn::dqn::{DqnConfig, DqnPreset};
-use naosoccer_learn::ppo::{PpoConfig, Preset};
+use naosoccer_learn::config::{DqnConfig, DqnPreset};
+use naosoccer_learn::config::{PpoConfig, Preset};
 use naosoccer_learn::train::{train, Algo, OpponentSpec, TrainConfig};
 use naosoccer_referee::MatchConfig;
 

@@ -21,177 +21,14 @@
 
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 use tch::nn::{self, OptimizerConfig};
 use tch::{Kind, Tensor};
 
-use crate::nets::{Activation, InitScheme, Mlp};
+use crate::config::DqnConfig;
+use crate::nets::QNet;
 use crate::obs::OBS_DIM;
-use crate::ppo::{DecisionConfig, ACTIONS, SHOOT};
 use crate::LearnError;
-
-/// The DQN hyperparameter sets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DqnPreset {
-    /// The paper's Algorithm 1 (the default; the shipped `dqn-seed*` teams).
-    #[default]
-    Paper,
-    /// Double DQN, n-step returns, an epsilon schedule, one shared network.
-    Team,
-}
-
-impl std::str::FromStr for DqnPreset {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "paper" => Ok(DqnPreset::Paper),
-            "team" | "dqn-team" => Ok(DqnPreset::Team),
-            o => Err(format!("unknown DQN preset {o:?} (expected paper or team)")),
-        }
-    }
-}
-
-/// Missing fields take the `paper` values, so configurations written before
-/// a field existed load as the runs that wrote them were trained.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct DqnConfig {
-    pub preset: DqnPreset,
-    /// Discount per control tick; a transition that lasted `dt` ticks is
-    /// discounted by `gamma^dt`.
-    pub gamma: f64,
-    pub lr: f64,
-    /// Probability of a uniformly random action once the schedule has run
-    /// out (the paper keeps it fixed); `dqn-epsilon:DIR` plays with it.
-    pub epsilon: f64,
-    /// The probability at the first transition; it falls linearly to
-    /// `epsilon` over `epsilon_decay` transitions (0: fixed at `epsilon`).
-    pub epsilon_start: f64,
-    pub epsilon_decay: u64,
-    /// Hidden widths: four hidden layers make the paper's five linear layers.
-    pub hidden: Vec<usize>,
-    /// Transitions each replay buffer keeps.
-    pub replay: usize,
-    pub batch: usize,
-    /// Transitions in a buffer before learning starts.
-    pub warmup: usize,
-    /// Gradient steps between copies to the target network.
-    pub target_every: usize,
-    /// Gradient steps per network for every vectorised environment step.
-    pub updates_per_step: usize,
-    /// One network for the team instead of one per robot.
-    pub shared: bool,
-    /// Double DQN: the online network chooses the next action, the target
-    /// network values it (van Hasselt et al. 2016).
-    pub double: bool,
-    /// Transitions summed into one return before bootstrapping (1: the paper).
-    pub n_step: usize,
-    /// Huber (smooth L1) loss instead of the paper's MSE.
-    pub huber: bool,
-    /// Gradient-norm clip (0: none, the paper).
-    pub max_grad_norm: f64,
-    /// The decision-level MDP (`None`: every robot decides every tick, the
-    /// paper): a robot decides only when free, a movement holds `persist`
-    /// ticks, `shoot` may be masked out of reach. A decision is one
-    /// transition, its reward the discounted sum over the ticks it lasted
-    /// and its discount `gamma^ticks`; learning steps come once per tick in
-    /// which some robot decided.
-    pub decision: Option<DecisionConfig>,
-}
-
-impl Default for DqnConfig {
-    fn default() -> Self {
-        DqnConfig::paper()
-    }
-}
-
-impl DqnConfig {
-    pub fn preset(p: DqnPreset) -> DqnConfig {
-        match p {
-            DqnPreset::Paper => DqnConfig::paper(),
-            DqnPreset::Team => DqnConfig::team(),
-        }
-    }
-
-    /// The paper's Algorithm 1, with our choices where it names none
-    /// (docs/LEARNING.md).
-    pub fn paper() -> DqnConfig {
-        DqnConfig {
-            preset: DqnPreset::Paper,
-            gamma: 0.99,
-            lr: 1e-3,
-            epsilon: 0.3,
-            epsilon_start: 0.3,
-            epsilon_decay: 0,
-            hidden: vec![128, 128, 128, 128],
-            replay: 100_000,
-            batch: 128,
-            warmup: 1_000,
-            target_every: 1_000,
-            updates_per_step: 1,
-            shared: false,
-            double: false,
-            n_step: 1,
-            huber: false,
-            max_grad_norm: 0.0,
-            decision: None,
-        }
-    }
-
-    /// Double DQN with 3-step returns, Huber loss, clipped gradients, epsilon
-    /// falling from 1 to 0.05 over the first million transitions, one
-    /// network for the team fed by all four robots, on the decision-level
-    /// MDP of PPO's `team` preset (movements hold 3 ticks, `shoot` masked
-    /// out of reach, gamma 0.995 per tick).
-    pub fn team() -> DqnConfig {
-        DqnConfig {
-            preset: DqnPreset::Team,
-            gamma: 0.995,
-            lr: 2.5e-4,
-            epsilon: 0.05,
-            epsilon_start: 1.0,
-            epsilon_decay: 1_000_000,
-            hidden: vec![256, 256],
-            replay: 300_000,
-            batch: 256,
-            warmup: 20_000,
-            target_every: 2_000,
-            updates_per_step: 1,
-            shared: true,
-            double: true,
-            n_step: 3,
-            huber: true,
-            max_grad_norm: 10.0,
-            decision: Some(DecisionConfig {
-                persist: 3,
-                mask_shoot: true,
-                pass: false,
-                support: false,
-                support_hold: 0,
-                chasers: 0,
-                support_only: false,
-                support_spot: Default::default(),
-                approach: false,
-                approach_only: false,
-            }),
-        }
-    }
-
-    /// The exploration rate after `transitions` robot transitions.
-    pub fn epsilon_at(&self, transitions: u64) -> f64 {
-        if self.epsilon_decay == 0 || transitions >= self.epsilon_decay {
-            return self.epsilon;
-        }
-        let left = 1.0 - transitions as f64 / self.epsilon_decay as f64;
-        self.epsilon + (self.epsilon_start - self.epsilon) * left
-    }
-
-    /// The discount of a transition that lasted `dt` control ticks.
-    pub fn discount(&self, dt: u32) -> f32 {
-        self.gamma.powi(dt as i32) as f32
-    }
-}
+use naosoccer_policy::actions::{ACTIONS, SHOOT};
 
 /// The paper's TD target `r + gamma max_a' Q_target(s', a') (1 - done)`;
 /// `q_next_target` is `[n, ACTIONS]`.
@@ -335,45 +172,6 @@ impl NStepRow {
         });
         self.start = (s + 1) % n;
         self.len -= 1;
-    }
-}
-
-/// A Q-network: `input -> hidden -> ACTIONS`, where `input` is the length
-/// of its observation layout.
-pub struct QNet {
-    pub vs: nn::VarStore,
-    mlp: Mlp,
-    input: usize,
-}
-
-impl QNet {
-    /// A network reading the first `input` features of each row (its
-    /// observation layout's length). `name` prefixes the variables
-    /// (`q0.l0.weight`, ...), so several networks can share one checkpoint
-    /// file.
-    pub fn with_input(input: usize, hidden: &[usize], name: &str) -> QNet {
-        let vs = nn::VarStore::new(tch::Device::Cpu);
-        let mlp = Mlp::new(
-            &(vs.root() / name),
-            input,
-            hidden,
-            ACTIONS,
-            Activation::Relu,
-            InitScheme::Default,
-        );
-        QNet { vs, mlp, input }
-    }
-
-    /// Q-values of `obs` rows, `[n, width]`: rows wider than the layout
-    /// (the buffers' [`OBS_DIM`]) are cut to its prefix.
-    pub fn q(&self, obs: &Tensor) -> Tensor {
-        let width = obs.size()[1];
-        if width as usize == self.input {
-            self.mlp.forward(obs)
-        } else {
-            self.mlp
-                .forward(&obs.narrow(1, 0, self.input as i64).contiguous())
-        }
     }
 }
 
@@ -740,6 +538,7 @@ pub use naosoccer_policy::actions::argmax;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::DqnPreset;
 
     #[test]
     fn td_target_is_reward_plus_discounted_max_unless_done() {

@@ -5,6 +5,10 @@
 use tch::nn::{self, Module};
 use tch::Tensor;
 
+use crate::config::{PpoConfig, Preset};
+use crate::obs::{ObsScale, OBS_DIM};
+use naosoccer_policy::actions::ACTIONS;
+
 pub use naosoccer_policy::Activation;
 
 /// How weights start.
@@ -68,5 +72,131 @@ impl Mlp {
 
     pub fn forward(&self, xs: &Tensor) -> Tensor {
         self.seq.forward(xs)
+    }
+}
+
+/// The actor (action logits) and critic (state value), in one `VarStore`:
+/// the actor's variables in optimiser group 0, the critic's in group 1, so
+/// one Adam runs both at their own learning rates.
+pub struct ActorCritic {
+    pub vs: nn::VarStore,
+    actor: Mlp,
+    critic: Mlp,
+    /// Input widths: the layout's length, and the critic's (a multiple of it
+    /// with a centralised critic).
+    pub obs_dim: usize,
+    pub critic_dim: usize,
+}
+
+impl ActorCritic {
+    /// The networks of a run: observations of `scale`'s layout, `learners`
+    /// robots per team (the centralised critic's input).
+    pub fn for_run(cfg: &PpoConfig, scale: &ObsScale, learners: usize) -> ActorCritic {
+        let d = scale.dim();
+        let c = if cfg.central_critic {
+            d * learners.max(1)
+        } else {
+            d
+        };
+        ActorCritic::new(cfg, d, c)
+    }
+
+    pub fn new(cfg: &PpoConfig, obs_dim: usize, critic_dim: usize) -> ActorCritic {
+        let vs = nn::VarStore::new(tch::Device::Cpu);
+        let (ai, ci) = match cfg.preset {
+            Preset::Paper => (InitScheme::Default, InitScheme::Default),
+            Preset::Cleanrl | Preset::Team => (
+                InitScheme::Orthogonal { output_gain: 0.01 },
+                InitScheme::Orthogonal { output_gain: 1.0 },
+            ),
+        };
+        let root = vs.root();
+        let actor = Mlp::new(
+            &(root.set_group(0) / "actor"),
+            obs_dim,
+            &cfg.hidden,
+            cfg.actions(),
+            Activation::Tanh,
+            ai,
+        );
+        let critic = Mlp::new(
+            &(root.set_group(1) / "critic"),
+            critic_dim,
+            &cfg.hidden,
+            1,
+            Activation::Tanh,
+            ci,
+        );
+        ActorCritic {
+            vs,
+            actor,
+            critic,
+            obs_dim,
+            critic_dim,
+        }
+    }
+
+    /// `n` rows of width `OBS_DIM` as the actor's input (their layout prefix).
+    pub fn actor_input(&self, rows: &[f32], n: usize) -> Tensor {
+        rows_tensor(rows, n, OBS_DIM, self.obs_dim)
+    }
+
+    /// Action logits, `[n, ACTIONS]`.
+    pub fn logits(&self, obs: &Tensor) -> Tensor {
+        self.actor.forward(obs)
+    }
+
+    /// State values, `[n]`.
+    pub fn value(&self, obs: &Tensor) -> Tensor {
+        self.critic.forward(obs).squeeze_dim(-1)
+    }
+}
+
+/// `n` rows of `width` floats as an `[n, dim]` tensor (the first `dim` of each).
+pub fn rows_tensor(rows: &[f32], n: usize, width: usize, dim: usize) -> Tensor {
+    let x = Tensor::from_slice(&rows[..n * width]).view([n as i64, width as i64]);
+    if dim == width {
+        x
+    } else {
+        x.narrow(1, 0, dim as i64).contiguous()
+    }
+}
+
+/// A Q-network: `input -> hidden -> ACTIONS`, where `input` is the length
+/// of its observation layout.
+pub struct QNet {
+    pub vs: nn::VarStore,
+    mlp: Mlp,
+    input: usize,
+}
+
+impl QNet {
+    /// A network reading the first `input` features of each row (its
+    /// observation layout's length). `name` prefixes the variables
+    /// (`q0.l0.weight`, ...), so several networks can share one checkpoint
+    /// file.
+    pub fn with_input(input: usize, hidden: &[usize], name: &str) -> QNet {
+        let vs = nn::VarStore::new(tch::Device::Cpu);
+        let mlp = Mlp::new(
+            &(vs.root() / name),
+            input,
+            hidden,
+            ACTIONS,
+            Activation::Relu,
+            InitScheme::Default,
+        );
+        QNet { vs, mlp, input }
+    }
+
+    /// Q-values of `obs` rows, `[n, width]`: rows wider than the layout
+    /// (the buffers' [`OBS_DIM`]) are cut to its prefix.
+    pub fn q(&self, obs: &Tensor) -> Tensor {
+        let width = obs.size()[1];
+        if width as usize == self.input {
+            self.mlp.forward(obs)
+        } else {
+            self.mlp
+                .forward(&obs.narrow(1, 0, self.input as i64).contiguous())
+        }
     }
 }
