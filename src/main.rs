@@ -6,6 +6,8 @@ use clap::{Parser, Subcommand};
 
 mod cmd;
 
+use naosoccer::interrupt;
+
 #[derive(Parser, Debug)]
 #[command(
     name = "naosoccer",
@@ -55,6 +57,17 @@ enum Command {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
+    // Commands that write tables or JSON and talk over no socket end quietly
+    // when their output pipe closes (`naosoccer eval | head`).
+    let pipes_only = match &cli.command {
+        Command::Match(a) => a.live.is_none(),
+        Command::Eval(_) | Command::League(_) | Command::Render(_) => true,
+        Command::Replay(a) => a.live.is_none(),
+        _ => false,
+    };
+    if pipes_only {
+        interrupt::default_sigpipe();
+    }
     let result = match cli.command {
         // Replay's exit code says what it found, so it reports by itself.
         Command::Replay(args) => return cmd::record::replay_cmd(args),
@@ -76,8 +89,12 @@ fn main() -> std::process::ExitCode {
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<interrupt::Interrupted>().is_some() => {
+            eprintln!("{e}");
+            std::process::ExitCode::from(interrupt::EXIT_INTERRUPTED)
+        }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", cmd::error_text(&e));
             std::process::ExitCode::FAILURE
         }
     }

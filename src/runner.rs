@@ -82,9 +82,23 @@ pub fn play_match_with(
 
 /// [`run_to_end`] with the actions and events of every tick.
 pub fn run_to_end_with(
+    m: Match,
+    policies: Vec<Box<dyn Policy>>,
+    mut on_tick: impl FnMut(&Match, &[Action; ROBOTS], &[Event]),
+) -> MatchOutcome {
+    run_until(m, policies, |m, actions, events| {
+        on_tick(m, actions, events);
+        std::ops::ControlFlow::Continue(())
+    })
+}
+
+/// [`run_to_end_with`], stopping early after a tick whose `on_tick` says
+/// `Break` (Ctrl-C): the outcome is then the match as far as it went
+/// (`ticks` below the match's length).
+pub fn run_until(
     mut m: Match,
     mut policies: Vec<Box<dyn Policy>>,
-    mut on_tick: impl FnMut(&Match, &[Action; ROBOTS], &[Event]),
+    mut on_tick: impl FnMut(&Match, &[Action; ROBOTS], &[Event]) -> std::ops::ControlFlow<()>,
 ) -> MatchOutcome {
     assert_eq!(policies.len(), ROBOTS, "one policy per robot");
     let start = Instant::now();
@@ -105,7 +119,9 @@ pub fn run_to_end_with(
         tick_events.clear();
         tick_events.extend_from_slice(m.step(&actions));
         events += tick_events.len() as u64;
-        on_tick(&m, &actions, &tick_events);
+        if on_tick(&m, &actions, &tick_events).is_break() {
+            break;
+        }
     }
     let wall_seconds = start.elapsed().as_secs_f64();
     MatchOutcome {

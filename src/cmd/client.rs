@@ -27,6 +27,7 @@ pub struct ClientArgs {
     /// Server address.
     #[arg(long, value_name = "HOST:PORT", default_value = "127.0.0.1:7878")]
     pub server: String,
+    /// The team these robots play for; its token (--token) must be that team's.
     #[arg(long, value_name = "blue|red")]
     pub team: Team,
     /// The team's token (printed by the server at start).

@@ -7,7 +7,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use naosoccer_policy::eval::{play_matches, EvalPlan, EvalReport, SeedScheme, Side};
+use naosoccer::interrupt;
+use naosoccer_policy::eval::{play_matches_until, EvalPlan, EvalReport, SeedScheme, Side};
 use naosoccer_referee::MatchConfig;
 
 /// The match configuration: a TOML file or the defaults (assets/match.toml),
@@ -80,6 +81,8 @@ pub struct EvalArgs {
     /// swapped as in one run of all of them.
     #[arg(long, default_value_t = 0)]
     first_match: usize,
+    /// The evaluation's seed: match i's seed is derived from it and i, so
+    /// the same --seed plays the same matches (see below).
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Play every other match with the sides swapped.
@@ -117,20 +120,42 @@ pub struct EvalArgs {
 }
 
 pub fn eval_cmd(a: EvalArgs) -> anyhow::Result<()> {
-    let report = if a.merge.is_empty() {
+    let (report, interrupted) = if a.merge.is_empty() {
         play(&a)?
     } else {
-        merge(&a.merge)?
+        (Some(merge(&a.merge)?), false)
     };
-    if a.json {
-        println!("{}", report.to_json());
-    } else {
-        print!("{}", report.table());
+    if let Some(report) = &report {
+        if a.json {
+            println!("{}", report.to_json());
+        } else {
+            print!("{}", report.table());
+        }
+    }
+    if interrupted {
+        let played = report.as_ref().map_or(0, |r| r.plan.matches);
+        return Err(interrupt::Interrupted::new(format!(
+            "eval stopped after {played} of {} matches{}",
+            a.matches,
+            if played > 0 {
+                " (the results above are of those: what --matches with that number prints)"
+            } else {
+                ""
+            }
+        ))
+        .into());
     }
     Ok(())
 }
 
-fn play(a: &EvalArgs) -> anyhow::Result<EvalReport> {
+/// Matches are played in blocks of this many, so that Ctrl-C keeps every
+/// block already finished (a block's results are what one run over all
+/// matches gives for them: see --first-match).
+const BLOCK: usize = 8;
+
+/// The report of the matches played (`None` if stopped before the first
+/// block ended) and whether Ctrl-C stopped the evaluation early.
+fn play(a: &EvalArgs) -> anyhow::Result<(Option<EvalReport>, bool)> {
     anyhow::ensure!(a.matches > 0, "--matches must be at least 1");
     anyhow::ensure!(
         a.first_match.checked_add(a.matches).is_some(),
@@ -153,16 +178,41 @@ fn play(a: &EvalArgs) -> anyhow::Result<EvalReport> {
             SeedScheme::Eval
         },
     };
+    interrupt::watch()?;
     let start = Instant::now();
-    let results = play_matches(&cfg, &mut blue, &mut red, &plan, a.threads)?;
+    let mut results = Vec::with_capacity(plan.matches);
+    let mut stopped = false;
+    while results.len() < plan.matches {
+        let block = EvalPlan {
+            matches: BLOCK.min(plan.matches - results.len()),
+            first_match: plan.first_match + results.len(),
+            ..plan
+        };
+        match play_matches_until(
+            &cfg,
+            &mut blue,
+            &mut red,
+            &block,
+            a.threads,
+            &interrupt::interrupted,
+        )? {
+            Some(r) => results.extend(r),
+            None => {
+                stopped = true;
+                break;
+            }
+        }
+    }
     let secs = start.elapsed().as_secs_f64();
-    Ok(EvalReport::new(
-        [blue_spec, a.red.clone()],
-        plan,
-        &cfg,
-        &results,
-        secs,
-    ))
+    if results.is_empty() {
+        return Ok((None, stopped));
+    }
+    let played = EvalPlan {
+        matches: results.len(),
+        ..plan
+    };
+    let report = EvalReport::new([blue_spec, a.red.clone()], played, &cfg, &results, secs);
+    Ok((Some(report), stopped))
 }
 
 /// The reports in `files`, merged into one run's.

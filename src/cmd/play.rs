@@ -72,7 +72,7 @@ pub struct MatchArgs {
     /// at real-time pace (see --speed).
     #[arg(long, value_name = "ADDR", num_args = 0..=1,
           default_missing_value = naosoccer::live::DEFAULT_ADDR)]
-    live: Option<String>,
+    pub live: Option<String>,
     /// With --live: game seconds per second of wall-clock time (1 = real
     /// time, 4 = four times as fast).
     #[arg(long, value_name = "X", default_value_t = 1.0, requires = "live")]
@@ -107,6 +107,8 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
         .collect::<anyhow::Result<Vec<_>>>()?;
     let show_progress = std::io::stdout().is_terminal();
     let mut last_shown = Tick::ZERO;
+    // From here on Ctrl-C ends the match after the current tick and keeps it.
+    naosoccer::interrupt::watch()?;
     let mut recording = match &args.record {
         Some(path) => Some(MatchRecording::start(path, &cfg, &args)?),
         None => None,
@@ -115,12 +117,20 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
         Some(addr) => Some(LiveMatch::start(addr, &cfg, &args)?),
         None => None,
     };
-    let outcome = runner::run_to_end_with(
+    // Ctrl-C before the end: the match's length in ticks, for the report.
+    let mut cut_short: Option<u64> = None;
+    let outcome = runner::run_until(
         Match::new(&cfg, args.seed)?,
         policies,
         |m, actions, events| {
+            // Ctrl-C: this tick is the last; the recording is finished with
+            // it (its final statistics say the match was not completed).
+            let stop = naosoccer::interrupt::interrupted() && !m.is_finished();
+            if stop {
+                cut_short = Some(m.total_ticks());
+            }
             if let Some(r) = &mut recording {
-                r.tick(m, actions, events);
+                r.tick(m, actions, events, stop);
             }
             if let Some(l) = &mut live {
                 l.tick(m, events);
@@ -140,8 +150,14 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
                     let _ = writeln!(err);
                 }
             }
+            if stop {
+                std::ops::ControlFlow::Break(())
+            } else {
+                std::ops::ControlFlow::Continue(())
+            }
         },
     );
+
     if let Some(l) = live {
         l.server.finish(naosoccer::live::LINGER);
     }
@@ -160,6 +176,18 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
         if let Some(r) = &recorded {
             println!("recorded to {} ({} bytes)", r.path.display(), r.bytes);
         }
+    }
+    if let Some(total) = cut_short {
+        return Err(naosoccer::interrupt::Interrupted::new(format!(
+            "the match stopped at tick {} of {total}; the results above are of the match so far{}",
+            outcome.ticks,
+            if recorded.is_some() {
+                ", and the recording is finished and readable (marked not completed)"
+            } else {
+                ""
+            }
+        ))
+        .into());
     }
     Ok(())
 }
@@ -232,11 +260,13 @@ impl MatchRecording {
         })
     }
 
-    fn tick(&mut self, m: &Match, actions: &[Action; ROBOTS], events: &[Event]) {
+    /// Records one tick; with `last` (Ctrl-C) or at the match's end also
+    /// finishes the recording.
+    fn tick(&mut self, m: &Match, actions: &[Action; ROBOTS], events: &[Event], last: bool) {
         let Some(rec) = &mut self.rec else { return };
         let r = rec.tick(m, actions, events);
         let r = r.and_then(|()| {
-            if m.is_finished() {
+            if m.is_finished() || last {
                 let rec = self.rec.take().expect("recorder present");
                 self.summary = Some(rec.finish(m)?.0);
             }

@@ -89,7 +89,7 @@ pub fn replay_cmd(args: ReplayArgs) -> ExitCode {
     };
     if let Some(addr) = &args.live {
         if let Err(e) = stream_recording(&rec, addr, &args) {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", crate::cmd::error_text(&e));
             return ExitCode::from(3);
         }
     }

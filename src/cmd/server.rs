@@ -16,9 +16,10 @@ A match starts once --start-players robots have joined (8: every slot is a \
 client); slots nobody joined are played by --fill. Ctrl-C or SIGTERM stops \
 every match; clients get a final match_end. Protocol: docs/PROTOCOL.md.")]
 pub struct ServerArgs {
-    /// Server configuration TOML (every field optional; see docs/PROTOCOL.md).
+    /// Server configuration TOML: address, port, mode, fill, tokens,
+    /// limits (every field optional; docs/PROTOCOL.md section 8).
     #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    pub server_config: Option<PathBuf>,
     /// Address to listen on [default: 127.0.0.1, loopback only].
     #[arg(long, value_name = "ADDR")]
     pub bind: Option<String>,
@@ -37,8 +38,9 @@ pub struct ServerArgs {
     /// Match length in minutes, overriding the match configuration [default: 10].
     #[arg(long)]
     pub minutes: Option<f32>,
-    /// Match configuration TOML [default: the built-in assets/match.toml].
-    #[arg(long, value_name = "FILE")]
+    /// Match configuration TOML, as `--config` of `match` and `eval`
+    /// [default: the built-in assets/match.toml].
+    #[arg(long = "config", visible_alias = "match-config", value_name = "FILE")]
     pub match_config: Option<PathBuf>,
     /// Who plays slots no client joined: scripted, scripted:1 to scripted:5
     /// (the ladder of built-in teams, weakest first), idle, or, in the
@@ -57,20 +59,20 @@ pub struct ServerArgs {
     /// Lockstep deadline per tick in milliseconds [default: 1000].
     #[arg(long)]
     pub deadline_ms: Option<u64>,
-    /// Blue's team token [default: from --config, else random and printed].
+    /// Blue's team token [default: from --server-config, else random and printed].
     #[arg(long, value_name = "TOKEN")]
     pub blue_token: Option<String>,
-    /// Red's team token [default: from --config, else random and printed].
+    /// Red's team token [default: from --server-config, else random and printed].
     #[arg(long, value_name = "TOKEN")]
     pub red_token: Option<String>,
-    /// The admin token (create_match) [default: from --config, else random and printed].
+    /// The admin token (create_match) [default: from --server-config, else random and printed].
     #[arg(long, value_name = "TOKEN")]
     pub admin_token: Option<String>,
     /// Exit once the matches created at start have all ended.
     #[arg(long)]
     pub exit_when_done: bool,
     /// Record every match to this directory, one MCAP file per match
-    /// (docs/RECORDINGS.md) [default: from --config, else ./recordings].
+    /// (docs/RECORDINGS.md) [default: from --server-config, else ./recordings].
     #[arg(long, value_name = "DIR", conflicts_with = "no_record")]
     pub record_dir: Option<PathBuf>,
     /// Do not record matches.
@@ -117,13 +119,52 @@ pub struct LimitArgs {
     pub idle_timeout_ms: Option<u64>,
 }
 
+/// `--config` is the match configuration for `server` as for every other
+/// subcommand (before, it was the server's own configuration): a server
+/// configuration given there is named as such, with the option it belongs to.
+fn refuse_server_config_as_match_config(path: &std::path::Path) -> anyhow::Result<()> {
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return Ok(()); // the match configuration's loader reports it
+    };
+    let Ok(table) = text.parse::<toml::Table>() else {
+        return Ok(());
+    };
+    const SERVER_KEYS: [&str; 9] = [
+        "bind",
+        "port",
+        "mode",
+        "fill",
+        "matches",
+        "tokens",
+        "limits",
+        "record_dir",
+        "start_players",
+    ];
+    let found: Vec<&str> = SERVER_KEYS
+        .into_iter()
+        .filter(|k| table.contains_key(*k))
+        .collect();
+    if found.is_empty() {
+        return Ok(());
+    }
+    anyhow::bail!(
+        "--config {}: this is a server configuration ({}), not a match configuration: \
+         pass it with --server-config",
+        path.display(),
+        found.join(", ")
+    )
+}
+
 fn config_from(args: &ServerArgs) -> anyhow::Result<ServerConfig> {
-    let mut cfg = match &args.config {
+    let mut cfg = match &args.server_config {
         Some(path) => {
             ServerConfig::from_file(path).with_context(|| format!("loading {}", path.display()))?
         }
         None => ServerConfig::default(),
     };
+    if let Some(path) = &args.match_config {
+        refuse_server_config_as_match_config(path)?;
+    }
     macro_rules! set {
         ($($field:ident),*) => { $( if let Some(v) = &args.$field { cfg.$field = v.clone(); } )* };
     }
@@ -305,7 +346,11 @@ fn with_live(
         }
         match naosoccer::live::LiveObserver::new(&live, info.match_id.0) {
             Ok(o) => all.push(Box::new(o)),
-            Err(e) => tracing::warn!("match {}: no live stream: {e:#}", info.match_id.0),
+            Err(e) => tracing::warn!(
+                "match {}: no live stream: {}",
+                info.match_id.0,
+                crate::cmd::error_text(&e)
+            ),
         }
         Some(Box::new(naosoccer_server::recording::Fanout(all)))
     }

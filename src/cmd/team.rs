@@ -48,7 +48,7 @@ impl TeamSpec {
                     name: spec.clone(),
                     batched: true,
                     build: std::sync::Arc::new(move |seed, _robot| {
-                        load_learned(&owned, seed).map_err(|e| format!("{e:#}"))
+                        load_learned(&owned, seed).map_err(|e| crate::cmd::error_text(&e))
                     }),
                 }
             }

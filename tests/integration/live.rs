@@ -86,22 +86,65 @@ async fn match_live_streams_the_scene_and_changes_nothing() {
     assert_eq!(ch["/match/1/tf"]["schemaName"], "foxglove.FrameTransforms");
     assert_eq!(ch["/match/1/tf"]["encoding"], "protobuf");
     assert_eq!(ch["/match/1/state"]["encoding"], "json");
+    // Every match topic docs/foxglove-layout.json's panels show is one the
+    // match advertises (the score panel once named a field it never had).
+    let layout: Value = serde_json::from_str(
+        &std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/docs/foxglove-layout.json"
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    let mut shown = Vec::new();
+    for panel in layout["configById"].as_object().unwrap().values() {
+        for key in ["topicPath", "path", "topicToRender"] {
+            if let Some(p) = panel[key].as_str() {
+                shown.push(p.split('.').next().unwrap().to_string());
+            }
+        }
+        if let Some(rules) = panel.get("rules") {
+            assert!(
+                !rules.as_array().unwrap().is_empty(),
+                "an indicator without rules: {panel}"
+            );
+        }
+    }
+    for topic in ["/match/1/score", "/match/1/log", "/match/1/stats"] {
+        assert!(
+            shown.iter().any(|t| t == topic),
+            "the layout does not show {topic}"
+        );
+    }
+    for topic in &shown {
+        assert!(
+            ch.contains_key(topic),
+            "the layout shows {topic}, which is not advertised"
+        );
+    }
     // The scene last: its subscription releases kick-off (--wait-viewer),
     // and `subscribe` has each taken before it asks for the next.
     ws.subscribe(&[
         (2, &ch["/match/1/state"]),
         (3, &ch["/match/1/tf"]),
+        (4, &ch["/match/1/score"]),
         (1, scene),
     ])
     .await
     .unwrap();
 
     let (mut scenes, mut pitches, mut tfs, mut ticks) = (0, 0, 0, Vec::new());
+    let mut scores = 0;
     while let Some((sub, v)) = ws.next_data().await {
         // Scenes and transforms come before the state of the same tick.
         if sub == 1 {
             pitches += assert_full_scene(&v).pitch as u32;
             scenes += 1;
+        } else if sub == 4 {
+            // The score panel's field: "blue 0 - 0 red   00:00".
+            let text = v["text"].as_str().unwrap_or_default();
+            assert!(text.starts_with("blue ") && text.contains(" red "), "{v}");
+            scores += 1;
         } else if sub == 3 {
             let t = v["transforms"].as_array().unwrap();
             assert_eq!(t.len(), 9, "{v}");
@@ -122,6 +165,7 @@ async fn match_live_streams_the_scene_and_changes_nothing() {
     assert_eq!(scenes, 301);
     assert_eq!(tfs, 301);
     assert_eq!(pitches, 31);
+    assert!(scores > 0, "no score message");
     assert_eq!(
         state_hash(child.wait_with_output().unwrap()),
         unwatched_hash(&base)

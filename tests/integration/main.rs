@@ -10,6 +10,7 @@
 mod common;
 
 mod eval_blocks;
+mod interrupt_cli;
 mod league_cli;
 mod learn_cli;
 mod learn_client;

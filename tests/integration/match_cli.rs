@@ -111,5 +111,37 @@ fn bad_input_is_a_clear_error() {
     let out = naosoccer(&["match", "--minutes", "0"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("match.minutes"));
+    // A TOML error is reported once, not once per layer of the error chain.
+    std::fs::write(&cfg, "[match]\nminutes = \"x\"\n").unwrap();
+    for cmd in [
+        &["match"][..],
+        &["eval", "--blue", "scripted", "--matches", "1"][..],
+    ] {
+        let mut args = cmd.to_vec();
+        args.extend(["--config", cfg.to_str().unwrap()]);
+        let out = naosoccer(&args);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.matches("TOML parse error").count(), 1, "{err}");
+        assert_eq!(err.matches("expected f32").count(), 1, "{err}");
+    }
+    // A team directory that does not exist is called missing.
+    let missing = dir.join("no-such-team");
+    let spec = format!("ppo:{}", missing.display());
+    let out = naosoccer(&["match", "--blue", &spec]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no such directory"), "{err}");
+    // `--config` is the match configuration for `server` too: a server
+    // configuration given there is named, with the option it belongs to.
+    let srv = dir.join("server.toml");
+    std::fs::write(&srv, "port = 0\nmatches = 1\n").unwrap();
+    let out = naosoccer(&["server", "--config", srv.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--server-config") && err.contains("port"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

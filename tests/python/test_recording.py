@@ -11,6 +11,7 @@ installed by scripts/setup), and the file stays small.
 import json
 import os
 import subprocess
+import sys
 from collections import Counter
 from pathlib import Path
 
@@ -155,3 +156,42 @@ def test_full_match_file_is_small(full_match):
     size = path.stat().st_size
     print(f"10-minute recording: {size / 1e6:.2f} MB")
     assert size < 20_000_000
+
+
+def python_blocks(doc: Path) -> list[str]:
+    """The ```python blocks of a Markdown file, in order."""
+    blocks, current = [], None
+    for line in doc.read_text().splitlines():
+        if current is None and line.strip() == "```python":
+            current = []
+        elif current is not None and line.strip() == "```":
+            blocks.append("\n".join(current))
+            current = None
+        elif current is not None:
+            current.append(line)
+    return blocks
+
+
+def test_every_python_snippet_of_recordings_md_runs(full_match, tmp_path):
+    """docs/RECORDINGS.md's readers, run as written in a directory holding
+    the files they open: `seed7.mcap` (a whole match) and `killed.mcap` (the
+    same file cut short at several places, as a killed server leaves it)."""
+    path, _ = full_match
+    data = path.read_bytes()
+    (tmp_path / "seed7.mcap").write_bytes(data)
+    blocks = python_blocks(REPO / "docs" / "RECORDINGS.md")
+    assert len(blocks) >= 3, "the reading examples are gone"
+    for i, code in enumerate(blocks):
+        cuts = [1.0] if "killed.mcap" not in code else [0.13, 0.5, 0.77, 0.9031, 0.999]
+        for frac in cuts:
+            (tmp_path / "killed.mcap").write_bytes(data[: int(len(data) * frac)])
+            out = subprocess.run(
+                [sys.executable, "-c", code],
+                cwd=tmp_path,
+                capture_output=True,
+                text=True,
+            )
+            assert out.returncode == 0, f"block {i} (cut {frac}):\n{code}\n{out.stderr}"
+            if "killed.mcap" in code:
+                assert "cut short" in out.stdout, out.stdout
+                assert "/match/state" in out.stdout, out.stdout

@@ -264,6 +264,20 @@ pub fn play_matches(
     plan: &EvalPlan,
     threads: usize,
 ) -> Result<Vec<MatchResult>, PolicyError> {
+    let all = play_matches_until(cfg, first, second, plan, threads, &|| false)?;
+    Ok(all.expect("never stopped"))
+}
+
+/// [`play_matches`], asking `stop` before every tick: once it says yes,
+/// the matches are dropped unfinished and the answer is `None` (Ctrl-C).
+pub fn play_matches_until(
+    cfg: &MatchConfig,
+    first: &mut Side,
+    second: &mut Side,
+    plan: &EvalPlan,
+    threads: usize,
+    stop: &dyn Fn() -> bool,
+) -> Result<Option<Vec<MatchResult>>, PolicyError> {
     let mut slots = Vec::with_capacity(plan.matches);
     for i in plan.indices() {
         let m = Match::new(cfg, plan.match_seed(i))?;
@@ -298,6 +312,9 @@ pub fn play_matches(
     }
     let mut acts = Vec::new();
     while slots.iter().any(|s| !s.m.is_finished()) {
+        if stop() {
+            return Ok(None);
+        }
         for (is_first, side) in [(true, &mut *first), (false, &mut *second)] {
             let Side::Learned(policy) = side else {
                 continue;
@@ -342,18 +359,20 @@ pub fn play_matches(
             });
         }
     }
-    Ok(slots
-        .iter()
-        .map(|s| MatchResult {
-            index: s.index,
-            seed: s.m.seed(),
-            score: s.m.score(),
-            stats: s.m.stats(),
-            long_passes: s.long_passes,
-            state_hash: s.m.state_hash(),
-            swapped: s.swapped,
-        })
-        .collect())
+    Ok(Some(
+        slots
+            .iter()
+            .map(|s| MatchResult {
+                index: s.index,
+                seed: s.m.seed(),
+                score: s.m.score(),
+                stats: s.m.stats(),
+                long_passes: s.long_passes,
+                state_hash: s.m.state_hash(),
+                swapped: s.swapped,
+            })
+            .collect(),
+    ))
 }
 
 fn team_of(slot: &Slot, first: bool) -> Team {

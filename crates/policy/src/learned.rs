@@ -235,6 +235,20 @@ pub fn resolve_run(path: &Path) -> Result<(PathBuf, PathBuf), PolicyError> {
         }
         return Ok((dir.join("config.json"), path.to_path_buf()));
     }
+    if !path.exists() {
+        return Err(PolicyError::Spec {
+            spec: path.display().to_string(),
+            reason: "no such directory (a team directory holds config.json and \
+                     final.safetensors, or a run's checkpoints/)"
+                .into(),
+        });
+    }
+    if !path.is_dir() {
+        return Err(PolicyError::Spec {
+            spec: path.display().to_string(),
+            reason: "not a directory or a .safetensors file".into(),
+        });
+    }
     let cfg = path.join("config.json");
     let fin = path.join("final.safetensors");
     if fin.exists() {
@@ -746,7 +760,15 @@ mod tests {
         assert!(std::error::Error::source(&err).is_none());
         let msg = err.to_string();
         assert_eq!(msg, format!("{}: no such weights file", file.display()));
+        // A directory that does not exist is said to be missing...
         let err = LearnedPolicy::load(&format!("ppo:{}", dir.display())).unwrap_err();
+        assert!(err.to_string().contains("no such directory"), "{err}");
+        // ...and one that exists but holds no weights says what is missing.
+        let empty =
+            std::env::temp_dir().join(format!("naosoccer-policy-empty-run-{}", std::process::id()));
+        std::fs::create_dir_all(&empty).unwrap();
+        let err = LearnedPolicy::load(&format!("ppo:{}", empty.display())).unwrap_err();
+        std::fs::remove_dir_all(&empty).ok();
         assert!(err.to_string().contains("no final.safetensors"), "{err}");
     }
 
