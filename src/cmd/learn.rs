@@ -407,7 +407,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     // The rate counts this process's transitions only: a resumed run starts
     // from its checkpoint's count (taken from its first report).
     let mut first_seen: Option<u64> = a.resume.is_none().then_some(0);
-    let mut show = |p: &naosoccer_learn::run::Progress<'_>| {
+    let mut show = |p: &naosoccer_learn::metrics::Progress<'_>| {
         let since = p.row.transitions - *first_seen.get_or_insert(p.row.transitions);
         if !p.row.episode_return.is_nan() {
             last_episodes = format!(

@@ -7,8 +7,8 @@
 //! per tick (`sum gamma^i r_i`, and `gamma^ticks`). It closes, and comes out
 //! as one [`Closed`] transition, when the robot next decides, when its
 //! episode ends or is cut (a pass drill's end), or at a rollout's edge
-//! ([`Decisions::cut`]). The learners (`train`) only choose actions for the
-//! deciding robots and store what closes.
+//! ([`Decisions::cut`]). The learners ([`crate::ppo`], [`crate::dqn`])
+//! only choose actions for the deciding robots and store what closes.
 //!
 //! A tick, in order: [`Decisions::ask`] (who decides, with their
 //! observations and masks), the learner's choice, [`Decisions::decide`],
@@ -235,6 +235,29 @@ impl<P: Copy> Decisions<P> {
                 }
                 self.holds[r].reset();
             }
+        }
+    }
+
+    /// The robots whose episodes were cut this tick (a drill's end,
+    /// [`End::Cut`]) and their critic inputs in the state where they were
+    /// cut, the state their last decisions bootstrap from.
+    pub fn cut_critic_rows(&self, env: &VecEnv, rows: &mut Vec<usize>, critic_obs: &mut Vec<f32>) {
+        rows.clear();
+        critic_obs.clear();
+        let (l, dim, cw) = (self.learners, self.scale.dim(), self.critic_width);
+        for r in (0..self.open.len()).filter(|&r| env.truncated()[r]) {
+            rows.push(r);
+            critic_row(env.final_observations(), l, r, dim, cw, critic_obs);
+        }
+    }
+
+    /// Every robot's critic input now (at a rollout's edge, the states the
+    /// decisions [`Decisions::cut`] closes bootstrap from).
+    pub fn critic_rows(&self, env: &VecEnv, critic_obs: &mut Vec<f32>) {
+        critic_obs.clear();
+        let (l, dim, cw) = (self.learners, self.scale.dim(), self.critic_width);
+        for r in 0..self.open.len() {
+            critic_row(env.observations(), l, r, dim, cw, critic_obs);
         }
     }
 

@@ -2,6 +2,7 @@
 //! under a named path in a `VarStore`, so checkpoints are safetensors files
 //! whose tensor names say what they are.
 
+use serde::{Deserialize, Serialize};
 use tch::nn::{self, Module};
 use tch::Tensor;
 
@@ -198,5 +199,57 @@ impl QNet {
             self.mlp
                 .forward(&obs.narrow(1, 0, self.input as i64).contiguous())
         }
+    }
+}
+
+/// Running mean and variance (Chan et al.'s parallel update), for value
+/// normalisation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RunningNorm {
+    pub mean: f64,
+    pub var: f64,
+    pub count: f64,
+}
+
+impl Default for RunningNorm {
+    fn default() -> RunningNorm {
+        RunningNorm {
+            mean: 0.0,
+            var: 1.0,
+            count: 1e-4,
+        }
+    }
+}
+
+impl RunningNorm {
+    pub fn update(&mut self, xs: &[f32]) {
+        if xs.is_empty() {
+            return;
+        }
+        let n = xs.len() as f64;
+        let mean = xs.iter().map(|&x| f64::from(x)).sum::<f64>() / n;
+        let var = xs
+            .iter()
+            .map(|&x| (f64::from(x) - mean).powi(2))
+            .sum::<f64>()
+            / n;
+        let total = self.count + n;
+        let delta = mean - self.mean;
+        let m2 = self.var * self.count + var * n + delta * delta * self.count * n / total;
+        self.mean += delta * n / total;
+        self.var = m2 / total;
+        self.count = total;
+    }
+
+    fn std(&self) -> f64 {
+        self.var.max(1e-8).sqrt()
+    }
+
+    pub fn normalise(&self, x: f32) -> f32 {
+        ((f64::from(x) - self.mean) / self.std()) as f32
+    }
+
+    pub fn denormalise(&self, y: f32) -> f32 {
+        (f64::from(y) * self.std() + self.mean) as f32
     }
 }

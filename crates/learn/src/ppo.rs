@@ -1,39 +1,154 @@
-//! PPO, actor-critic.
+//! PPO for a team (`team` preset): actor-critic on the decision-level MDP
+//! ([`crate::decisions`]). A robot decides only when it is free to act,
+//! movement persists, `shoot` (and what [`DecisionConfig`] bans) is masked,
+//! and a transition spans the ticks from one decision to the next: returns
+//! are discounted by the time that elapsed (`gamma^dt`, GAE with
+//! `(gamma lambda)^dt`), bootstrapped at rollout edges and where a drill
+//! cut an episode. On top of CleanRL's machinery (minibatches, per-batch
+//! advantage normalisation, gradient clipping): value normalisation, a KL
+//! early stop, learning-rate and entropy schedules, and an optional
+//! centralised critic (MAPPO: the critic reads the whole team's
+//! observation vectors).
 //!
-//! Two presets:
-//! - `paper` (default): the paper's Algorithm 2 as the widely copied
-//!   PPO-PyTorch code does it — discounted returns computed backwards and
-//!   normalised, `A = R_norm - V(s)`, clipped surrogate, MSE value loss,
-//!   entropy bonus, `K` epochs over the full batch, Adam with separate
-//!   learning rates for actor (3e-4) and critic (1e-3), 64-64 tanh networks.
-//! - `cleanrl`: GAE(lambda) with a bootstrapped value at the rollout's end,
-//!   per-minibatch advantage normalisation, gradient-norm clipping and
-//!   orthogonal initialisation (CleanRL's `ppo.py`).
-//! - `team`: the decision-level MDP ([`DecisionConfig`]): a robot decides
-//!   only when it is free to act, movement persists for `persist` ticks,
-//!   `shoot` is masked while the ball is out of kick reach, and returns are
-//!   discounted by the time that elapsed (`gamma^dt`, GAE with
-//!   `(gamma lambda)^dt`), bootstrapped at rollout edges; on top of
-//!   cleanrl's machinery: value normalisation, a KL early stop, learning-rate
-//!   and entropy schedules and an optional centralised critic (MAPPO: the
-//!   critic reads the whole team's observation vectors).
+//! Read top to bottom: the loop ([`train`]), acting ([`Ppo::act_masked`],
+//! [`Ppo::critic_values`]), storing ([`Transitions`]), the advantage
+//! ([`Transitions::gae`]) and the update ([`Ppo::update_decisions`]). The
+//! run directory, metrics, opponents and checkpoints are the harness's
+//! ([`crate::run`]); the per-tick presets (`paper`, `cleanrl`) are
+//! [`crate::ppo_paper`].
 
-use rand::Rng;
+use std::path::Path;
+
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
-use tch::nn::{self, OptimizerConfig};
+use tch::nn;
 use tch::{Kind, Tensor};
 
 use crate::adam::Adam;
-use crate::config::{PpoConfig, Preset};
-use crate::decisions::{Closed, End};
-use crate::nets::ActorCritic;
+use crate::config::{run_scale, PpoConfig, TrainConfig};
+use crate::decisions::{Closed, Decisions, End};
+use crate::metrics::Progress;
+use crate::nets::{ActorCritic, RunningNorm};
 use crate::obs::ObsScale;
+use crate::run::resume::{read_checkpoint, ResumeState};
+use crate::run::{make_env, Run, TrainSummary};
+use crate::warm_start::{init_weights, SUPPORT_INIT_BIAS};
 use crate::LearnError;
 
 pub use naosoccer_policy::actions::{
     action_count, action_mask, sample, shoot_mask, DecisionConfig, ACTIONS, PASS, SHOOT, STAY,
 };
+
+/// Trains a team-preset run into `out`, or goes on from `resume` (a
+/// checkpoint of the run in `out`) as if it had not stopped.
+///
+/// Every tick each learning robot either decides (a forward pass; its open
+/// transition closes with the new decision's value) or holds its action;
+/// an episode's end closes it with no bootstrap, a drill's cut and the
+/// rollout's edge with the critic's value of the state reached. A rollout
+/// also ends with the episodes (all matches have one length and end
+/// together): checkpoints fall on episode boundaries, where a resumed run
+/// can rebuild the matches exactly.
+pub(crate) fn train(
+    cfg: &TrainConfig,
+    out: &Path,
+    resume: Option<ResumeState>,
+    progress: &mut dyn FnMut(&Progress<'_>),
+) -> Result<TrainSummary, LearnError> {
+    let decision = cfg
+        .ppo
+        .decision
+        .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
+    let mut env = make_env(cfg)?;
+    let scale = run_scale(cfg);
+    let mut ppo = Ppo::new(cfg.ppo.clone(), &scale, cfg.learners.len())?;
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let mut run = match &resume {
+        None => {
+            if let Some(from) = &cfg.init_from {
+                let pass_from = cfg.init_pass_from.unwrap_or(naosoccer_proto::Action::Shoot);
+                let support_bias = cfg.init_support_bias.unwrap_or(SUPPORT_INIT_BIAS);
+                init_weights(&mut ppo, from, pass_from, support_bias)?;
+            }
+            Run::start(cfg, out, &mut env, &[&ppo.net.vs], true, progress)?
+        }
+        Some(st) => {
+            read_checkpoint(out, st, &mut ppo.net.vs, ppo.adam.as_mut())?;
+            ppo.value_norm = st.value_norm;
+            rng = st.rng()?;
+            Run::resume(cfg, out, st, &mut env, progress)?
+        }
+    };
+    let rows = env.rows();
+    let cw = ppo.net.critic_dim;
+    let mut dec = Decisions::<Act>::new(&env, decision, scale, cw, cfg.ppo.gamma as f32);
+    let mut tr = Transitions::default();
+    // Each robot's last transition, while the next one of its stream (the
+    // decision that followed) is open.
+    let mut link: Vec<Option<usize>> = vec![None; rows];
+    let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
+    let mut acts = Vec::new();
+    let (mut cut_rows, mut cut_cobs, mut cut_val) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut boot, mut edge_cobs, mut edge_val) = (vec![0.0f32; rows], Vec::new(), vec![0.0; rows]);
+    while !run.done() {
+        tr.clear();
+        let mut ticks = 0usize;
+        let mut boundary = false;
+        while ticks < cfg.ppo.rollout && !boundary {
+            ticks += 1;
+            let asked = dec.ask(&env);
+            let k = asked.rows.len();
+            dec_act.resize(k, 0);
+            dec_logp.resize(k, 0.0);
+            dec_val.resize(k, 0.0);
+            let (obs, ok, banned) = (&asked.obs, &asked.shoot_ok, &asked.banned);
+            ppo.act_masked(obs, ok, banned, &mut rng, &mut dec_act, &mut dec_logp);
+            ppo.critic_values(&asked.critic_obs, &mut dec_val);
+            acts.clear();
+            acts.extend(
+                dec_logp
+                    .iter()
+                    .zip(&dec_val)
+                    .map(|(&logp, &value)| Act { logp, value }),
+            );
+            dec.decide(&env, &dec_act, &acts, &mut |c| {
+                let End::Decided { next, .. } = c.end else {
+                    unreachable!("a decision closes here only by the next one")
+                };
+                tr.push(&c, dec_val[next], false, &mut link);
+            });
+            let finished = env.step(dec.actions())?;
+            // Episodes cut short (pass drills) are bootstrapped with the
+            // critic's value of the state where they were cut.
+            dec.cut_critic_rows(&env, &mut cut_rows, &mut cut_cobs);
+            cut_val.resize(cut_rows.len(), 0.0);
+            ppo.critic_values(&cut_cobs, &mut cut_val);
+            for (&r, &v) in cut_rows.iter().zip(&cut_val) {
+                boot[r] = v;
+            }
+            dec.observe(&env, &mut |c| match c.end {
+                End::Cut => tr.push(&c, boot[c.row], false, &mut link),
+                _ => tr.push(&c, 0.0, true, &mut link),
+            });
+            run.observe(env.rewards(), finished);
+            boundary = env.dones().iter().all(|&d| d);
+        }
+        // The rollout's edge: open transitions end here, bootstrapped with
+        // the critic's value of the state they reached.
+        dec.critic_rows(&env, &mut edge_cobs);
+        ppo.critic_values(&edge_cobs, &mut edge_val);
+        dec.cut(&mut |c| tr.push(&c, edge_val[c.row], false, &mut link));
+        let before = run.count(ticks * rows);
+        let stats = ppo.update_decisions(&tr, before as f64 / cfg.steps.max(1) as f64, &mut rng);
+        run.log(&env, (stats.policy_loss, stats.value_loss, stats.entropy))?;
+        run.refresh_opponents(before, &mut env, &[&ppo.net.vs])?;
+        if boundary && run.checkpoint_due() {
+            let adam = ppo.adam.as_ref();
+            run.checkpoint_resumable(&env, &rng, &ppo.net.vs, adam, ppo.value_norm)?;
+        }
+    }
+    run.finish(&[&ppo.net.vs])
+}
 
 /// The clipped surrogate objective, as a loss to minimise:
 /// `-mean(min(ratio * A, clip(ratio, 1 - eps, 1 + eps) * A))` with
@@ -43,78 +158,6 @@ pub fn clipped_surrogate_loss(logp: &Tensor, logp_old: &Tensor, adv: &Tensor, cl
     let s1 = &ratio * adv;
     let s2 = ratio.clamp(1.0 - clip, 1.0 + clip) * adv;
     -s1.min_other(&s2).mean(Kind::Float)
-}
-
-/// Discounted returns computed backwards, restarting at episode ends, for a
-/// rollout stored time-major (`[t][stream]`): `R_t = r_t + gamma R_{t+1} (1 - done_t)`.
-/// No bootstrap past the rollout's end (the paper's estimator).
-pub fn discounted_returns(rewards: &[f32], dones: &[f32], streams: usize, gamma: f32) -> Vec<f32> {
-    let steps = rewards.len() / streams;
-    let mut out = vec![0.0; rewards.len()];
-    let mut acc = vec![0.0f32; streams];
-    for t in (0..steps).rev() {
-        for (s, a) in acc.iter_mut().enumerate() {
-            let i = t * streams + s;
-            *a = rewards[i] + gamma * *a * (1.0 - dones[i]);
-            out[i] = *a;
-        }
-    }
-    out
-}
-
-/// Generalised advantage estimation over a time-major rollout, bootstrapped
-/// with `last_values` (the values of the observations after the last step).
-/// Returns `(advantages, returns = advantages + values)`.
-pub fn gae(
-    rewards: &[f32],
-    values: &[f32],
-    dones: &[f32],
-    last_values: &[f32],
-    gamma: f32,
-    lambda: f32,
-) -> (Vec<f32>, Vec<f32>) {
-    let streams = last_values.len();
-    let steps = rewards.len() / streams;
-    let mut adv = vec![0.0; rewards.len()];
-    let mut last = vec![0.0f32; streams];
-    for t in (0..steps).rev() {
-        for s in 0..streams {
-            let i = t * streams + s;
-            let next_v = if t + 1 == steps {
-                last_values[s]
-            } else {
-                values[i + streams]
-            };
-            let nonterminal = 1.0 - dones[i];
-            let delta = rewards[i] + gamma * next_v * nonterminal - values[i];
-            last[s] = delta + gamma * lambda * nonterminal * last[s];
-            adv[i] = last[s];
-        }
-    }
-    let ret = adv.iter().zip(values).map(|(a, v)| a + v).collect();
-    (adv, ret)
-}
-
-/// One rollout: every learner robot's transitions, time-major.
-#[derive(Debug, Default)]
-pub struct Rollout {
-    pub obs: Vec<f32>,
-    pub actions: Vec<i64>,
-    pub logp: Vec<f32>,
-    pub values: Vec<f32>,
-    pub rewards: Vec<f32>,
-    pub dones: Vec<f32>,
-}
-
-impl Rollout {
-    pub fn clear(&mut self) {
-        self.obs.clear();
-        self.actions.clear();
-        self.logp.clear();
-        self.values.clear();
-        self.rewards.clear();
-        self.dones.clear();
-    }
 }
 
 /// What one update reports.
@@ -129,12 +172,14 @@ pub struct UpdateStats {
     pub passes: u32,
 }
 
-/// The PPO learner: networks, optimiser and the sampling RNG.
+/// The PPO learner: the networks, their optimiser and the value
+/// normalisation.
 pub struct Ppo {
     pub cfg: PpoConfig,
     pub net: ActorCritic,
-    opt: nn::Optimizer,
-    probs: Vec<f32>,
+    /// The per-tick presets' optimiser ([`crate::ppo_paper`]).
+    pub(crate) opt: nn::Optimizer,
+    pub(crate) probs: Vec<f32>,
     /// Running statistics of the value targets (`value_norm`).
     pub value_norm: RunningNorm,
     /// The decision-level updates' optimiser (its state is checkpointed,
@@ -148,18 +193,7 @@ impl Ppo {
     /// robots per team.
     pub fn new(cfg: PpoConfig, scale: &ObsScale, learners: usize) -> Result<Ppo, LearnError> {
         let net = ActorCritic::for_run(&cfg, scale, learners);
-        let eps = if cfg.preset == Preset::Cleanrl {
-            1e-5
-        } else {
-            1e-8
-        };
-        let mut opt = nn::Adam {
-            eps,
-            ..Default::default()
-        }
-        .build(&net.vs, cfg.lr_actor)?;
-        opt.set_lr_group(0, cfg.lr_actor);
-        opt.set_lr_group(1, cfg.lr_critic);
+        let opt = crate::ppo_paper::optimiser(&cfg, &net.vs)?;
         let adam = cfg.decision.is_some().then(|| {
             Adam::new(&net.vs, vec![cfg.lr_actor, cfg.lr_critic], 1e-5, |name| {
                 usize::from(!name.starts_with("actor"))
@@ -308,17 +342,11 @@ impl Ppo {
                     (lr.exp() - 1.0 - &lr).mean(Kind::Float)
                 });
                 let kl = f64::try_from(&kl).unwrap_or(f64::NAN);
-                accumulate(
-                    &mut stats,
-                    UpdateStats {
-                        policy_loss: f64::try_from(&pl).unwrap_or(f64::NAN),
-                        value_loss: f64::try_from(&vl).unwrap_or(f64::NAN),
-                        entropy: f64::try_from(&entropy).unwrap_or(f64::NAN),
-                        approx_kl: kl,
-                        passes: 0,
-                    },
-                    &mut count,
-                );
+                stats.policy_loss += f64::try_from(&pl).unwrap_or(f64::NAN);
+                stats.value_loss += f64::try_from(&vl).unwrap_or(f64::NAN);
+                stats.entropy += f64::try_from(&entropy).unwrap_or(f64::NAN);
+                stats.approx_kl += kl;
+                count += 1.0;
                 stats.passes += 1;
                 if cfg.target_kl.is_some_and(|t| kl > 1.5 * t) {
                     break 'passes;
@@ -334,207 +362,14 @@ impl Ppo {
         }
         stats
     }
-
-    /// Samples one action per row of `obs` (`n` rows of `OBS_DIM`) in one
-    /// forward pass; writes actions, their log-probabilities and the values.
-    pub fn act(
-        &mut self,
-        obs: &[f32],
-        rng: &mut ChaCha8Rng,
-        actions: &mut [usize],
-        logp: &mut [f32],
-        values: &mut [f32],
-    ) {
-        let n = actions.len();
-        let x = self.net.actor_input(obs, n);
-        let (p, v) = tch::no_grad(|| {
-            (
-                self.net.logits(&x).softmax(-1, Kind::Float),
-                self.net.value(&x),
-            )
-        });
-        self.probs.resize(n * ACTIONS, 0.0);
-        p.copy_data(&mut self.probs, n * ACTIONS);
-        v.copy_data(values, n);
-        for i in 0..n {
-            let row = &self.probs[i * ACTIONS..(i + 1) * ACTIONS];
-            let a = sample(row, rng.random::<f32>());
-            actions[i] = a;
-            logp[i] = row[a].max(1e-12).ln();
-        }
-    }
-
-    /// Values of `n` observations (the bootstrap for GAE).
-    pub fn values(&self, obs: &[f32], out: &mut [f32]) {
-        let n = out.len();
-        let x = self.net.actor_input(obs, n);
-        tch::no_grad(|| self.net.value(&x)).copy_data(out, n);
-    }
-
-    /// One PPO update on a rollout of `streams` robots. `last_values` are the
-    /// critic's values of the observations after the rollout (cleanrl only).
-    pub fn update(
-        &mut self,
-        ro: &Rollout,
-        streams: usize,
-        last_values: &[f32],
-        rng: &mut ChaCha8Rng,
-    ) -> UpdateStats {
-        let n = ro.actions.len();
-        let cfg = self.cfg.clone();
-        let obs = self.net.actor_input(&ro.obs, n);
-        let actions = Tensor::from_slice(&ro.actions);
-        let logp_old = Tensor::from_slice(&ro.logp);
-        let mut stats = UpdateStats::default();
-        let mut count = 0.0;
-        match cfg.preset {
-            Preset::Paper => {
-                let r = discounted_returns(&ro.rewards, &ro.dones, streams, cfg.gamma as f32);
-                let r = Tensor::from_slice(&r);
-                let r_norm = (&r - r.mean(Kind::Float)) / (r.std(true) + 1e-7);
-                for _ in 0..cfg.epochs {
-                    let s = self.step(&obs, &actions, &logp_old, None, &r_norm);
-                    accumulate(&mut stats, s, &mut count);
-                }
-            }
-            Preset::Cleanrl | Preset::Team => {
-                let (adv, ret) = gae(
-                    &ro.rewards,
-                    &ro.values,
-                    &ro.dones,
-                    last_values,
-                    cfg.gamma as f32,
-                    cfg.gae_lambda as f32,
-                );
-                let adv = Tensor::from_slice(&adv);
-                let ret = Tensor::from_slice(&ret);
-                let mb = n.div_ceil(cfg.minibatches.max(1));
-                let mut order: Vec<i64> = (0..n as i64).collect();
-                for _ in 0..cfg.epochs {
-                    shuffle(&mut order, rng);
-                    for chunk in order.chunks(mb) {
-                        let idx = Tensor::from_slice(chunk);
-                        let a = adv.index_select(0, &idx);
-                        let a = (&a - a.mean(Kind::Float)) / (a.std(true) + 1e-8);
-                        let s = self.step(
-                            &obs.index_select(0, &idx),
-                            &actions.index_select(0, &idx),
-                            &logp_old.index_select(0, &idx),
-                            Some(&a),
-                            &ret.index_select(0, &idx),
-                        );
-                        accumulate(&mut stats, s, &mut count);
-                    }
-                }
-            }
-        }
-        if count > 0.0 {
-            stats.policy_loss /= count;
-            stats.value_loss /= count;
-            stats.entropy /= count;
-        }
-        stats
-    }
-
-    /// One gradient step. Without `adv`, the advantage is `target - V(s)`
-    /// with the critic's current values (the paper's `A = R_norm - V`).
-    fn step(
-        &mut self,
-        obs: &Tensor,
-        actions: &Tensor,
-        logp_old: &Tensor,
-        adv: Option<&Tensor>,
-        target: &Tensor,
-    ) -> UpdateStats {
-        let logits = self.net.logits(obs);
-        let logp_all = logits.log_softmax(-1, Kind::Float);
-        let logp = logp_all
-            .gather(1, &actions.unsqueeze(1), false)
-            .squeeze_dim(1);
-        let entropy = -(logp_all.exp() * &logp_all)
-            .sum_dim_intlist(-1, false, Kind::Float)
-            .mean(Kind::Float);
-        let v = self.net.value(obs);
-        let adv = match adv {
-            Some(a) => a.shallow_clone(),
-            None => target - v.detach(),
-        };
-        let pl = clipped_surrogate_loss(&logp, logp_old, &adv, self.cfg.clip);
-        let vl = (&v - target).square().mean(Kind::Float);
-        let loss = &pl + self.cfg.value_coef * &vl - self.cfg.entropy_coef * &entropy;
-        self.opt.zero_grad();
-        loss.backward();
-        if let Some(m) = self.cfg.max_grad_norm {
-            self.opt.clip_grad_norm(m);
-        }
-        self.opt.step();
-        UpdateStats {
-            policy_loss: f64::try_from(&pl).unwrap_or(f64::NAN),
-            value_loss: f64::try_from(&vl).unwrap_or(f64::NAN),
-            entropy: f64::try_from(&entropy).unwrap_or(f64::NAN),
-            ..UpdateStats::default()
-        }
-    }
 }
 
-fn accumulate(total: &mut UpdateStats, s: UpdateStats, count: &mut f64) {
+pub(crate) fn accumulate(total: &mut UpdateStats, s: UpdateStats, count: &mut f64) {
     total.policy_loss += s.policy_loss;
     total.value_loss += s.value_loss;
     total.entropy += s.entropy;
     total.approx_kl += s.approx_kl;
     *count += 1.0;
-}
-
-/// Running mean and variance (Chan et al.'s parallel update), for value
-/// normalisation.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RunningNorm {
-    pub mean: f64,
-    pub var: f64,
-    pub count: f64,
-}
-
-impl Default for RunningNorm {
-    fn default() -> RunningNorm {
-        RunningNorm {
-            mean: 0.0,
-            var: 1.0,
-            count: 1e-4,
-        }
-    }
-}
-
-impl RunningNorm {
-    pub fn update(&mut self, xs: &[f32]) {
-        if xs.is_empty() {
-            return;
-        }
-        let n = xs.len() as f64;
-        let mean = xs.iter().map(|&x| f64::from(x)).sum::<f64>() / n;
-        let var = xs
-            .iter()
-            .map(|&x| (f64::from(x) - mean).powi(2))
-            .sum::<f64>()
-            / n;
-        let total = self.count + n;
-        let delta = mean - self.mean;
-        let m2 = self.var * self.count + var * n + delta * delta * self.count * n / total;
-        self.mean += delta * n / total;
-        self.var = m2 / total;
-        self.count = total;
-    }
-
-    fn std(&self) -> f64 {
-        self.var.max(1e-8).sqrt()
-    }
-
-    pub fn normalise(&self, x: f32) -> f32 {
-        ((f64::from(x) - self.mean) / self.std()) as f32
-    }
-
-    pub fn denormalise(&self, y: f32) -> f32 {
-        (f64::from(y) * self.std() + self.mean) as f32
-    }
 }
 
 /// Decision-level transitions: each spans the `dt` ticks from one decision
@@ -655,7 +490,7 @@ impl Transitions {
 }
 
 /// Fisher-Yates with our own RNG, so minibatches repeat with the seed.
-fn shuffle(v: &mut [i64], rng: &mut ChaCha8Rng) {
+pub(crate) fn shuffle(v: &mut [i64], rng: &mut ChaCha8Rng) {
     for i in (1..v.len()).rev() {
         let j = rng.random_range(0..=i);
         v.swap(i, j);
@@ -666,6 +501,7 @@ fn shuffle(v: &mut [i64], rng: &mut ChaCha8Rng) {
 mod tests {
     use super::*;
     use crate::obs::OBS_DIM;
+    use crate::ppo_paper::{discounted_returns, gae};
     use rand::SeedableRng;
 
     fn vals(t: &Tensor) -> Vec<f32> {
