@@ -35,7 +35,7 @@ use tch::nn::{self, OptimizerConfig};
 use tch::{Kind, Tensor};
 
 use crate::config::{run_scale, DqnConfig, TrainConfig};
-use crate::decisions::{Decisions, End};
+use crate::env::decisions::{Decisions, End};
 use crate::metrics::Progress;
 use crate::nets::QNet;
 use crate::obs::OBS_DIM;

@@ -11,7 +11,7 @@
 //! - [`env`]: many matches in process, stepped together; the learning
 //!   team's robots as one batch of rows; built-in, frozen, self-play or
 //!   mixed opponents; drills.
-//! - [`decisions`]: the decision-level MDP over [`env`], and the only place
+//! - [`env::decisions`]: the decision-level MDP over [`env`], and the only place
 //!   that holds actions and keeps decisions open: who decides this tick,
 //!   under which masks; each closed decision comes out as one transition
 //!   (observation, action, discounted reward, discount, how it ended).
@@ -42,7 +42,7 @@
 //!   [`adam`] (an Adam whose state a checkpoint saves).
 //!
 //! A third algorithm is one new file beside these: a `train` that builds
-//! the environment (`run::make_env`), acts on [`decisions::Decisions`],
+//! the environment (`run::make_env`), acts on [`env::decisions::Decisions`],
 //! stores and updates, and drives a `run::Run` for everything else; its
 //! settings join [`config`] (an [`Algo`] variant) and one line of
 //! [`train::train`] sends its runs to it.
@@ -53,7 +53,6 @@
 
 pub mod adam;
 pub mod config;
-pub mod decisions;
 pub mod dqn;
 pub mod dqn_paper;
 pub mod env;

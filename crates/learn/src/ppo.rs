@@ -1,5 +1,5 @@
 //! PPO for a team (`team` preset): actor-critic on the decision-level MDP
-//! ([`crate::decisions`]). A robot decides only when it is free to act,
+//! ([`crate::env::decisions`]). A robot decides only when it is free to act,
 //! movement persists, `shoot` (and what [`DecisionConfig`] bans) is masked,
 //! and a transition spans the ticks from one decision to the next: returns
 //! are discounted by the time that elapsed (`gamma^dt`, GAE with
@@ -26,7 +26,7 @@ use tch::{Kind, Tensor};
 
 use crate::adam::Adam;
 use crate::config::{run_scale, PpoConfig, TrainConfig};
-use crate::decisions::{Closed, Decisions, End};
+use crate::env::decisions::{Closed, Decisions, End};
 use crate::metrics::Progress;
 use crate::nets::{ActorCritic, RunningNorm};
 use crate::obs::ObsScale;
@@ -501,7 +501,7 @@ pub(crate) fn shuffle(v: &mut [i64], rng: &mut ChaCha8Rng) {
 mod tests {
     use super::*;
     use crate::obs::OBS_DIM;
-    use crate::ppo_paper::{discounted_returns, gae};
+    use crate::ppo_paper::gae;
     use rand::SeedableRng;
 
     fn vals(t: &Tensor) -> Vec<f32> {
@@ -544,29 +544,6 @@ mod tests {
         loss.backward();
         // d(-ratio)/dlogp = -ratio inside the clip range.
         assert!((vals(&logp.grad())[0] + 0.1f32.exp()).abs() < 1e-5);
-    }
-
-    #[test]
-    fn returns_are_discounted_backwards_and_restart_at_episode_ends() {
-        // Two streams, three steps, time-major; stream 0's episode ends at t = 1.
-        let rewards = [1.0, 0.0, 1.0, 0.0, 1.0, 1.0];
-        let dones = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0];
-        let r = discounted_returns(&rewards, &dones, 2, 0.5);
-        // Stream 0: 1 + 0.5 * 1, then 1 (its episode ends), 1; stream 1: 0.25, 0.5, 1.
-        assert_eq!(r, vec![1.5, 0.25, 1.0, 0.5, 1.0, 1.0]);
-    }
-
-    #[test]
-    fn gae_with_lambda_one_is_the_bootstrapped_return_minus_value() {
-        let rewards = [1.0, 1.0];
-        let values = [0.5, 0.25];
-        let (adv, ret) = gae(&rewards, &values, &[0.0, 0.0], &[2.0], 0.5, 1.0);
-        // R_1 = 1 + 0.5 * 2 = 2; R_0 = 1 + 0.5 * 2 = 2.
-        assert_eq!(ret, vec![2.0, 2.0]);
-        assert_eq!(adv, vec![1.5, 1.75]);
-        // lambda = 0: one-step TD errors.
-        let (adv, _) = gae(&rewards, &values, &[0.0, 1.0], &[2.0], 0.5, 0.0);
-        assert_eq!(adv, vec![1.0 + 0.5 * 0.25 - 0.5, 1.0 - 0.25]);
     }
 
     #[test]

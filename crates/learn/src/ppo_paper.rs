@@ -297,3 +297,31 @@ pub(crate) fn optimiser(cfg: &PpoConfig, vs: &nn::VarStore) -> Result<nn::Optimi
     opt.set_lr_group(1, cfg.lr_critic);
     Ok(opt)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn returns_are_discounted_backwards_and_restart_at_episode_ends() {
+        // Two streams, three steps, time-major; stream 0's episode ends at t = 1.
+        let rewards = [1.0, 0.0, 1.0, 0.0, 1.0, 1.0];
+        let dones = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0];
+        let r = discounted_returns(&rewards, &dones, 2, 0.5);
+        // Stream 0: 1 + 0.5 * 1, then 1 (its episode ends), 1; stream 1: 0.25, 0.5, 1.
+        assert_eq!(r, vec![1.5, 0.25, 1.0, 0.5, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn gae_with_lambda_one_is_the_bootstrapped_return_minus_value() {
+        let rewards = [1.0, 1.0];
+        let values = [0.5, 0.25];
+        let (adv, ret) = gae(&rewards, &values, &[0.0, 0.0], &[2.0], 0.5, 1.0);
+        // R_1 = 1 + 0.5 * 2 = 2; R_0 = 1 + 0.5 * 2 = 2.
+        assert_eq!(ret, vec![2.0, 2.0]);
+        assert_eq!(adv, vec![1.5, 1.75]);
+        // lambda = 0: one-step TD errors.
+        let (adv, _) = gae(&rewards, &values, &[0.0, 1.0], &[2.0], 0.5, 0.0);
+        assert_eq!(adv, vec![1.0 + 0.5 * 0.25 - 0.5, 1.0 - 0.25]);
+    }
+}

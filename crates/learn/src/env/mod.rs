@@ -9,6 +9,9 @@
 //! Matches are independent, so stepping them on several threads gives the
 //! same results as on one: each match's seed depends only on the base seed,
 //! its index and its episode number.
+//!
+//! Over it, [`decisions`] is the decision-level MDP the team presets learn
+//! on: holds, masks and open decisions, each closed decision one transition.
 
 use naosoccer_client::{Policy, PolicyKind};
 use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
@@ -17,6 +20,7 @@ use naosoccer_referee::{Match, MatchConfig};
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
 
+pub mod decisions;
 mod drills;
 mod opponents;
 pub use drills::{Drill, PassDrills};
