@@ -54,7 +54,7 @@ pub use crate::replay::MASKED_Q;
 /// accumulator as one transition with its discounted reward and discount
 /// `gamma^ticks`. A learning step follows every tick in which a robot
 /// decided; a metrics row every `log_every` ticks.
-pub(crate) fn train(
+pub fn train(
     cfg: &TrainConfig,
     out: &Path,
     progress: &mut dyn FnMut(&Progress<'_>),

@@ -92,7 +92,7 @@ fn forward_argmax(net: &QNet, obs: &[f32], n: usize, q: &mut Vec<f32>, out: &mut
 
 /// Trains a per-tick DQN run (`paper` preset): every robot decides every
 /// tick, epsilon-greedy; a learning step after every tick.
-pub(crate) fn train(
+pub fn train(
     cfg: &TrainConfig,
     out: &Path,
     progress: &mut dyn FnMut(&Progress<'_>),

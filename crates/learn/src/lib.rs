@@ -8,18 +8,19 @@
 //! Three parts, and where a change goes.
 //!
 //! **The environment**: what a learner sees and does.
-//! - [`env`]: many matches in process, stepped together; the learning
+//! - [`mod@env`]: many matches in process, stepped together; the learning
 //!   team's robots as one batch of rows; built-in, frozen, self-play or
 //!   mixed opponents; drills.
-//! - [`env::decisions`]: the decision-level MDP over [`env`], and the only place
-//!   that holds actions and keeps decisions open: who decides this tick,
-//!   under which masks; each closed decision comes out as one transition
-//!   (observation, action, discounted reward, discount, how it ended).
+//! - [`env::decisions`]: the decision-level MDP over the matches, and the
+//!   only place that holds actions and keeps decisions open: who decides
+//!   this tick, under which masks; each closed decision comes out as one
+//!   transition (observation, action, discounted reward, discount, how it
+//!   ended).
 //! - [`obs`]: the observation vector (versioned layout, see
 //!   docs/LEARNING.md).
 //!
 //! **The run harness**: what a run needs that is not the algorithm.
-//! - [`train`]: the front door: the learner a configuration asks for;
+//! - [`mod@train`]: the front door: the learner a configuration asks for;
 //!   resume.
 //! - [`run`]: the run directory, metrics rows, checkpoints, self-play
 //!   snapshots and the opponent schedule as played (its `Run`); the

@@ -49,7 +49,7 @@ pub use naosoccer_policy::actions::{
 /// also ends with the episodes (all matches have one length and end
 /// together): checkpoints fall on episode boundaries, where a resumed run
 /// can rebuild the matches exactly.
-pub(crate) fn train(
+pub fn train(
     cfg: &TrainConfig,
     out: &Path,
     resume: Option<ResumeState>,

@@ -236,7 +236,7 @@ impl Ppo {
 
 /// Trains a per-tick PPO run (`paper` or `cleanrl` preset): every robot
 /// decides every tick; an update after each rollout of `rollout` ticks.
-pub(crate) fn train(
+pub fn train(
     cfg: &TrainConfig,
     out: &Path,
     progress: &mut dyn FnMut(&Progress<'_>),

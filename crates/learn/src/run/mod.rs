@@ -48,7 +48,7 @@ pub(crate) use setup::make_env;
 /// A training run as a learner drives it: the run directory and the
 /// metrics rows written so far, the transition count, the opponents it
 /// keeps up to date and the checkpoints it has taken.
-pub(crate) struct Run<'a> {
+pub struct Run<'a> {
     cfg: &'a TrainConfig,
     out: &'a Path,
     dir: RunDir,
