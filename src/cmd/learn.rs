@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use naosoccer_learn::dqn::{DqnConfig, DqnPreset};
-use naosoccer_learn::ppo::{PpoConfig, Preset};
+use naosoccer_learn::config::{DqnConfig, DqnPreset};
+use naosoccer_learn::config::{PpoConfig, Preset};
 use naosoccer_learn::train::{train, Algo, OpponentSpec, TrainConfig};
 use naosoccer_referee::MatchConfig;
 
@@ -445,7 +445,7 @@ pub(crate) fn run_train(a: TrainArgs, tick: &mut dyn FnMut()) -> anyhow::Result<
     // The rate counts this process's transitions only: a resumed run starts
     // from its checkpoint's count (taken from its first report).
     let mut first_seen: Option<u64> = a.resume.is_none().then_some(0);
-    let mut show = |p: &naosoccer_learn::train::Progress<'_>| {
+    let mut show = |p: &naosoccer_learn::metrics::Progress<'_>| {
         tick();
         let since = p.row.transitions - *first_seen.get_or_insert(p.row.transitions);
         if !p.row.episode_return.is_nan() {

@@ -14,6 +14,9 @@ mod interrupt_cli;
 mod league_cli;
 mod learn_cli;
 mod learn_client;
+// Pinned training bytes (issue 41): the runs need libtorch.
+#[cfg(feature = "train")]
+mod learn_pins;
 mod learn_shipped;
 mod live;
 mod match_cli;

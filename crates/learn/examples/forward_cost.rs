@@ -10,9 +10,10 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
 
-use naosoccer_learn::dqn::QNet;
+use naosoccer_learn::nets::QNet;
+use naosoccer_learn::nets::{rows_tensor, ActorCritic};
 use naosoccer_learn::obs::OBS_DIM;
-use naosoccer_learn::ppo::{rows_tensor, ActorCritic, ACTIONS};
+use naosoccer_learn::ppo::ACTIONS;
 use naosoccer_learn::train::{run_scale, Algo, TrainConfig};
 use naosoccer_policy::{Activation, Mlp, Weights};
 use naosoccer_proto::Team;

@@ -18,178 +18,137 @@
 //! robot is free again. An n-step return multiplies the discounts of its
 //! steps: `R = r_0 + g_0 r_1 + g_0 g_1 r_2 + ...`, bootstrapped with
 //! `g_0 g_1 ... g_{n-1} Q(s_n, .)`, and with nothing once the episode ended.
+//!
+//! Read top to bottom: the loop of the decision-level MDP ([`train`]),
+//! acting ([`epsilon_greedy`] over [`Dqn::q_values`]), storing
+//! ([`Dqn::remember`], into [`crate::replay`]) and the update ([`Dqn::learn`],
+//! its target [`td_target_discounted`]). The run directory, metrics,
+//! opponents and checkpoints are the harness's ([`crate::run`]); the
+//! per-tick loop, in which every robot acts every tick, is
+//! [`crate::dqn_paper`].
 
-use rand::Rng;
+use std::path::Path;
+
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 use tch::nn::{self, OptimizerConfig};
 use tch::{Kind, Tensor};
 
-use crate::nets::{Activation, InitScheme, Mlp};
+use crate::config::{run_scale, DqnConfig, TrainConfig};
+use crate::env::decisions::{Decisions, End};
+use crate::metrics::Progress;
+use crate::nets::QNet;
 use crate::obs::OBS_DIM;
-use crate::ppo::{DecisionConfig, ACTIONS, SHOOT};
+use crate::replay::{NStep, Replay};
+use crate::run::{make_env, Run, TrainSummary};
 use crate::LearnError;
+use naosoccer_policy::actions::{ACTIONS, SHOOT};
 
-/// The DQN hyperparameter sets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DqnPreset {
-    /// The paper's Algorithm 1 (the default; the shipped `dqn-seed*` teams).
-    #[default]
-    Paper,
-    /// Double DQN, n-step returns, an epsilon schedule, one shared network.
-    Team,
+pub use crate::replay::MASKED_Q;
+
+/// Trains a DQN run on the decision-level MDP (`team` preset) into `out`.
+///
+/// Each tick, the robots free to act whose last decision ran out decide
+/// (epsilon-greedy over the actions allowed them); a decision closes when
+/// the robot next decides, or when the episode ends, and enters the n-step
+/// accumulator as one transition with its discounted reward and discount
+/// `gamma^ticks`. A learning step follows every tick in which a robot
+/// decided; a metrics row every `log_every` ticks.
+pub fn train(
+    cfg: &TrainConfig,
+    out: &Path,
+    progress: &mut dyn FnMut(&Progress<'_>),
+) -> Result<TrainSummary, LearnError> {
+    let decision = cfg
+        .dqn
+        .decision
+        .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
+    let mut env = make_env(cfg)?;
+    let scale = run_scale(cfg);
+    let robots = cfg.learners.len();
+    let mut dqn = Dqn::new(cfg.dqn.clone(), robots, scale.dim())?;
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let mut run = Run::start(cfg, out, &mut env, &dqn.stores(), false, progress)?;
+    let rows = env.rows();
+    let mut dec = Decisions::<()>::new(&env, decision, scale, 0, cfg.dqn.discount(1));
+    let (mut q, mut chosen) = (Vec::new(), Vec::new());
+    let mut nstep = NStep::new(cfg.dqn.n_step, rows);
+    let mut loss = LossMean::default();
+    let mut step = 0usize;
+    while !run.done() {
+        let asked = dec.ask(&env);
+        let any = !asked.rows.is_empty();
+        if any {
+            let obs = env.observations();
+            dqn.q_values(obs, robots, &mut q);
+            let epsilon = cfg.dqn.epsilon_at(run.transitions());
+            chosen.clear();
+            for (&r, &ok) in asked.rows.iter().zip(&asked.shoot_ok) {
+                let q = &q[r * ACTIONS..(r + 1) * ACTIONS];
+                chosen.push(epsilon_greedy(q, ok, epsilon, &mut rng));
+            }
+            let none = vec![(); chosen.len()];
+            dec.decide(&env, &chosen, &none, &mut |c| {
+                // The decision that ran until now ends in this state.
+                let End::Decided { shoot_ok, .. } = c.end else {
+                    unreachable!("a decision closes here only by the next one")
+                };
+                let (r, next) = (c.row, &obs[c.row * OBS_DIM..(c.row + 1) * OBS_DIM]);
+                nstep.push(r, c.obs, c.action, c.reward, c.discount, false, &mut |t| {
+                    let k = r % robots;
+                    dqn.remember(k, t.obs, t.action, t.ret, next, t.discount, shoot_ok)
+                });
+            });
+        }
+        let finished = env.step(dec.actions())?;
+        dec.observe(&env, &mut |c| {
+            // Terminal: the next observation is never bootstrapped from.
+            let r = c.row;
+            nstep.push(r, c.obs, c.action, c.reward, c.discount, true, &mut |t| {
+                dqn.remember(r % robots, t.obs, t.action, t.ret, c.obs, t.discount, true)
+            });
+        });
+        run.observe(env.rewards(), finished);
+        if any {
+            loss.add(dqn.learn(&mut rng));
+        }
+        let before = run.count(rows);
+        step += 1;
+        if step.is_multiple_of(cfg.log_every.max(1)) || run.done() {
+            run.log(&env, (loss.take(), f64::NAN, f64::NAN))?;
+        }
+        run.refresh_opponents(before, &mut env, &dqn.stores())?;
+        if run.checkpoint_due() {
+            run.checkpoint(&dqn.stores())?;
+        }
+    }
+    run.finish(&dqn.stores())
 }
 
-impl std::str::FromStr for DqnPreset {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "paper" => Ok(DqnPreset::Paper),
-            "team" | "dqn-team" => Ok(DqnPreset::Team),
-            o => Err(format!("unknown DQN preset {o:?} (expected paper or team)")),
-        }
-    }
+/// The mean TD loss of the learning steps since the last metrics row.
+#[derive(Default)]
+pub(crate) struct LossMean {
+    sum: f64,
+    n: u32,
 }
 
-/// Missing fields take the `paper` values, so configurations written before
-/// a field existed load as the runs that wrote them were trained.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct DqnConfig {
-    pub preset: DqnPreset,
-    /// Discount per control tick; a transition that lasted `dt` ticks is
-    /// discounted by `gamma^dt`.
-    pub gamma: f64,
-    pub lr: f64,
-    /// Probability of a uniformly random action once the schedule has run
-    /// out (the paper keeps it fixed); `dqn-epsilon:DIR` plays with it.
-    pub epsilon: f64,
-    /// The probability at the first transition; it falls linearly to
-    /// `epsilon` over `epsilon_decay` transitions (0: fixed at `epsilon`).
-    pub epsilon_start: f64,
-    pub epsilon_decay: u64,
-    /// Hidden widths: four hidden layers make the paper's five linear layers.
-    pub hidden: Vec<usize>,
-    /// Transitions each replay buffer keeps.
-    pub replay: usize,
-    pub batch: usize,
-    /// Transitions in a buffer before learning starts.
-    pub warmup: usize,
-    /// Gradient steps between copies to the target network.
-    pub target_every: usize,
-    /// Gradient steps per network for every vectorised environment step.
-    pub updates_per_step: usize,
-    /// One network for the team instead of one per robot.
-    pub shared: bool,
-    /// Double DQN: the online network chooses the next action, the target
-    /// network values it (van Hasselt et al. 2016).
-    pub double: bool,
-    /// Transitions summed into one return before bootstrapping (1: the paper).
-    pub n_step: usize,
-    /// Huber (smooth L1) loss instead of the paper's MSE.
-    pub huber: bool,
-    /// Gradient-norm clip (0: none, the paper).
-    pub max_grad_norm: f64,
-    /// The decision-level MDP (`None`: every robot decides every tick, the
-    /// paper): a robot decides only when free, a movement holds `persist`
-    /// ticks, `shoot` may be masked out of reach. A decision is one
-    /// transition, its reward the discounted sum over the ticks it lasted
-    /// and its discount `gamma^ticks`; learning steps come once per tick in
-    /// which some robot decided.
-    pub decision: Option<DecisionConfig>,
-}
-
-impl Default for DqnConfig {
-    fn default() -> Self {
-        DqnConfig::paper()
-    }
-}
-
-impl DqnConfig {
-    pub fn preset(p: DqnPreset) -> DqnConfig {
-        match p {
-            DqnPreset::Paper => DqnConfig::paper(),
-            DqnPreset::Team => DqnConfig::team(),
+impl LossMean {
+    pub(crate) fn add(&mut self, loss: Option<f64>) {
+        if let Some(l) = loss {
+            self.sum += l;
+            self.n += 1;
         }
     }
 
-    /// The paper's Algorithm 1, with our choices where it names none
-    /// (docs/LEARNING.md).
-    pub fn paper() -> DqnConfig {
-        DqnConfig {
-            preset: DqnPreset::Paper,
-            gamma: 0.99,
-            lr: 1e-3,
-            epsilon: 0.3,
-            epsilon_start: 0.3,
-            epsilon_decay: 0,
-            hidden: vec![128, 128, 128, 128],
-            replay: 100_000,
-            batch: 128,
-            warmup: 1_000,
-            target_every: 1_000,
-            updates_per_step: 1,
-            shared: false,
-            double: false,
-            n_step: 1,
-            huber: false,
-            max_grad_norm: 0.0,
-            decision: None,
-        }
-    }
-
-    /// Double DQN with 3-step returns, Huber loss, clipped gradients, epsilon
-    /// falling from 1 to 0.05 over the first million transitions, one
-    /// network for the team fed by all four robots, on the decision-level
-    /// MDP of PPO's `team` preset (movements hold 3 ticks, `shoot` masked
-    /// out of reach, gamma 0.995 per tick).
-    pub fn team() -> DqnConfig {
-        DqnConfig {
-            preset: DqnPreset::Team,
-            gamma: 0.995,
-            lr: 2.5e-4,
-            epsilon: 0.05,
-            epsilon_start: 1.0,
-            epsilon_decay: 1_000_000,
-            hidden: vec![256, 256],
-            replay: 300_000,
-            batch: 256,
-            warmup: 20_000,
-            target_every: 2_000,
-            updates_per_step: 1,
-            shared: true,
-            double: true,
-            n_step: 3,
-            huber: true,
-            max_grad_norm: 10.0,
-            decision: Some(DecisionConfig {
-                persist: 3,
-                mask_shoot: true,
-                pass: false,
-                support: false,
-                support_hold: 0,
-                chasers: 0,
-                support_only: false,
-                support_spot: Default::default(),
-                approach: false,
-                approach_only: false,
-            }),
-        }
-    }
-
-    /// The exploration rate after `transitions` robot transitions.
-    pub fn epsilon_at(&self, transitions: u64) -> f64 {
-        if self.epsilon_decay == 0 || transitions >= self.epsilon_decay {
-            return self.epsilon;
-        }
-        let left = 1.0 - transitions as f64 / self.epsilon_decay as f64;
-        self.epsilon + (self.epsilon_start - self.epsilon) * left
-    }
-
-    /// The discount of a transition that lasted `dt` control ticks.
-    pub fn discount(&self, dt: u32) -> f32 {
-        self.gamma.powi(dt as i32) as f32
+    /// The mean (NaN when no step was taken), starting afresh.
+    pub(crate) fn take(&mut self) -> f64 {
+        let mean = if self.n > 0 {
+            self.sum / f64::from(self.n)
+        } else {
+            f64::NAN
+        };
+        *self = LossMean::default();
+        mean
     }
 }
 
@@ -231,274 +190,6 @@ pub fn td_target_discounted(
     returns + next * discounts
 }
 
-/// What a masked action's Q-value becomes: never the largest, and (times a
-/// discount of 0 at an episode's end) still finite.
-pub const MASKED_Q: f32 = -1e9;
-
-/// Turns each row's stream of one-step transitions into n-step transitions:
-/// once a row holds `n` steps its oldest leaves, carrying the discounted sum
-/// of the `n` rewards and the product of their discounts; when an episode
-/// ends every pending step leaves with the rest of its return and a
-/// bootstrap discount of 0.
-pub struct NStep {
-    n: usize,
-    rows: Vec<NStepRow>,
-}
-
-struct NStepRow {
-    /// Ring of the last `n` observations, actions, rewards and discounts.
-    obs: Vec<f32>,
-    actions: Vec<usize>,
-    rewards: Vec<f32>,
-    discounts: Vec<f32>,
-    start: usize,
-    len: usize,
-}
-
-/// A transition ready for the replay buffer.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NStepOut<'a> {
-    pub obs: &'a [f32],
-    pub action: usize,
-    /// `r_0 + g_0 r_1 + g_0 g_1 r_2 + ...`
-    pub ret: f32,
-    /// `g_0 g_1 ... g_{k-1}`, or 0 when the episode ended within the k steps.
-    pub discount: f32,
-}
-
-impl NStep {
-    pub fn new(n: usize, rows: usize) -> NStep {
-        let n = n.max(1);
-        NStep {
-            n,
-            rows: (0..rows)
-                .map(|_| NStepRow {
-                    obs: vec![0.0; n * OBS_DIM],
-                    actions: vec![0; n],
-                    rewards: vec![0.0; n],
-                    discounts: vec![0.0; n],
-                    start: 0,
-                    len: 0,
-                })
-                .collect(),
-        }
-    }
-
-    /// Adds row `row`'s step (`obs`, `action`) that earned `reward`, lasted
-    /// with discount `discount` and ended the episode if `done`; calls `emit`
-    /// with each transition that is complete, and the observation to
-    /// bootstrap from (`next_obs`; unused when the discount is 0).
-    #[allow(clippy::too_many_arguments)]
-    pub fn push(
-        &mut self,
-        row: usize,
-        obs: &[f32],
-        action: usize,
-        reward: f32,
-        discount: f32,
-        done: bool,
-        emit: &mut dyn FnMut(NStepOut<'_>),
-    ) {
-        let n = self.n;
-        let r = &mut self.rows[row];
-        let slot = (r.start + r.len) % n;
-        r.obs[slot * OBS_DIM..(slot + 1) * OBS_DIM].copy_from_slice(obs);
-        r.actions[slot] = action;
-        r.rewards[slot] = reward;
-        r.discounts[slot] = discount;
-        r.len += 1;
-        if done {
-            while r.len > 0 {
-                r.emit_front(n, true, emit);
-            }
-            r.start = 0;
-        } else if r.len == n {
-            r.emit_front(n, false, emit);
-        }
-    }
-}
-
-impl NStepRow {
-    fn emit_front(&mut self, n: usize, terminal: bool, emit: &mut dyn FnMut(NStepOut<'_>)) {
-        let (mut ret, mut disc) = (0.0f32, 1.0f32);
-        for j in 0..self.len {
-            let k = (self.start + j) % n;
-            ret += disc * self.rewards[k];
-            disc *= self.discounts[k];
-        }
-        let s = self.start;
-        emit(NStepOut {
-            obs: &self.obs[s * OBS_DIM..(s + 1) * OBS_DIM],
-            action: self.actions[s],
-            ret,
-            discount: if terminal { 0.0 } else { disc },
-        });
-        self.start = (s + 1) % n;
-        self.len -= 1;
-    }
-}
-
-/// A Q-network: `input -> hidden -> ACTIONS`, where `input` is the length
-/// of its observation layout.
-pub struct QNet {
-    pub vs: nn::VarStore,
-    mlp: Mlp,
-    input: usize,
-}
-
-impl QNet {
-    /// A network reading the first `input` features of each row (its
-    /// observation layout's length). `name` prefixes the variables
-    /// (`q0.l0.weight`, ...), so several networks can share one checkpoint
-    /// file.
-    pub fn with_input(input: usize, hidden: &[usize], name: &str) -> QNet {
-        let vs = nn::VarStore::new(tch::Device::Cpu);
-        let mlp = Mlp::new(
-            &(vs.root() / name),
-            input,
-            hidden,
-            ACTIONS,
-            Activation::Relu,
-            InitScheme::Default,
-        );
-        QNet { vs, mlp, input }
-    }
-
-    /// Q-values of `obs` rows, `[n, width]`: rows wider than the layout
-    /// (the buffers' [`OBS_DIM`]) are cut to its prefix.
-    pub fn q(&self, obs: &Tensor) -> Tensor {
-        let width = obs.size()[1];
-        if width as usize == self.input {
-            self.mlp.forward(obs)
-        } else {
-            self.mlp
-                .forward(&obs.narrow(1, 0, self.input as i64).contiguous())
-        }
-    }
-}
-
-/// A ring buffer of transitions.
-pub struct Replay {
-    cap: usize,
-    len: usize,
-    next: usize,
-    obs: Vec<f32>,
-    next_obs: Vec<f32>,
-    actions: Vec<i64>,
-    /// Returns (the reward, or an n-step sum).
-    rewards: Vec<f32>,
-    /// Bootstrap discounts: `gamma^dt` (products for n-step), 0 at episode end.
-    discounts: Vec<f32>,
-    /// Whether `shoot` is possible in `next_obs` (always, without a mask).
-    next_ok: Vec<bool>,
-}
-
-impl Replay {
-    pub fn new(cap: usize) -> Replay {
-        Replay {
-            cap,
-            len: 0,
-            next: 0,
-            obs: vec![0.0; cap * OBS_DIM],
-            next_obs: vec![0.0; cap * OBS_DIM],
-            actions: vec![0; cap],
-            rewards: vec![0.0; cap],
-            discounts: vec![0.0; cap],
-            next_ok: vec![true; cap],
-        }
-    }
-
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    /// One transition: `reward` is its (n-step) return and `discount` what
-    /// multiplies `Q(next_obs, .)` in its target (0 when the episode ended).
-    pub fn push(
-        &mut self,
-        obs: &[f32],
-        action: usize,
-        reward: f32,
-        next_obs: &[f32],
-        discount: f32,
-        next_shoot_ok: bool,
-    ) {
-        let i = self.next;
-        self.obs[i * OBS_DIM..(i + 1) * OBS_DIM].copy_from_slice(obs);
-        self.next_obs[i * OBS_DIM..(i + 1) * OBS_DIM].copy_from_slice(next_obs);
-        self.actions[i] = action as i64;
-        self.rewards[i] = reward;
-        self.discounts[i] = discount;
-        self.next_ok[i] = next_shoot_ok;
-        self.next = (i + 1) % self.cap;
-        self.len = (self.len + 1).min(self.cap);
-    }
-
-    /// A uniform minibatch: (obs, actions, returns, next_obs, discounts,
-    /// the additive mask of `next_obs`'s actions).
-    fn sample(
-        &self,
-        batch: usize,
-        rng: &mut ChaCha8Rng,
-        scratch: &mut Scratch,
-    ) -> (Tensor, Tensor, Tensor, Tensor, Tensor, Tensor) {
-        scratch.clear();
-        for _ in 0..batch {
-            let i = rng.random_range(0..self.len);
-            scratch
-                .obs
-                .extend_from_slice(&self.obs[i * OBS_DIM..(i + 1) * OBS_DIM]);
-            scratch
-                .next_obs
-                .extend_from_slice(&self.next_obs[i * OBS_DIM..(i + 1) * OBS_DIM]);
-            scratch.actions.push(self.actions[i]);
-            scratch.rewards.push(self.rewards[i]);
-            scratch.discounts.push(self.discounts[i]);
-            let row = scratch.mask.len();
-            scratch.mask.resize(row + ACTIONS, 0.0);
-            if !self.next_ok[i] {
-                scratch.mask[row + SHOOT] = MASKED_Q;
-            }
-        }
-        let shape = [batch as i64, OBS_DIM as i64];
-        (
-            Tensor::from_slice(&scratch.obs).view(shape),
-            Tensor::from_slice(&scratch.actions),
-            Tensor::from_slice(&scratch.rewards),
-            Tensor::from_slice(&scratch.next_obs).view(shape),
-            Tensor::from_slice(&scratch.discounts),
-            Tensor::from_slice(&scratch.mask).view([batch as i64, ACTIONS as i64]),
-        )
-    }
-}
-
-#[derive(Default)]
-struct Scratch {
-    obs: Vec<f32>,
-    next_obs: Vec<f32>,
-    actions: Vec<i64>,
-    rewards: Vec<f32>,
-    discounts: Vec<f32>,
-    mask: Vec<f32>,
-    q: Vec<f32>,
-    rows: Vec<f32>,
-}
-
-impl Scratch {
-    fn clear(&mut self) {
-        self.obs.clear();
-        self.next_obs.clear();
-        self.actions.clear();
-        self.rewards.clear();
-        self.discounts.clear();
-        self.mask.clear();
-    }
-}
-
 /// The DQN learner for a team's learning robots.
 pub struct Dqn {
     pub cfg: DqnConfig,
@@ -508,7 +199,9 @@ pub struct Dqn {
     opts: Vec<nn::Optimizer>,
     replays: Vec<Replay>,
     grad_steps: Vec<usize>,
-    scratch: Scratch,
+    /// Scratch rows and Q-values of forward passes.
+    pub(crate) rows: Vec<f32>,
+    pub(crate) q: Vec<f32>,
 }
 
 impl Dqn {
@@ -534,7 +227,8 @@ impl Dqn {
             nets,
             targets,
             opts,
-            scratch: Scratch::default(),
+            rows: Vec::new(),
+            q: Vec::new(),
         })
     }
 
@@ -547,31 +241,9 @@ impl Dqn {
         }
     }
 
-    /// Epsilon-greedy actions for `n` robots; row `i` belongs to learning
-    /// robot `i % robots`. One forward pass per network over all its rows.
-    pub fn act(
-        &mut self,
-        obs: &[f32],
-        robots: usize,
-        epsilon: f64,
-        rng: &mut ChaCha8Rng,
-        actions: &mut [usize],
-    ) {
-        let n = actions.len();
-        greedy_actions(
-            &self.nets,
-            self.cfg.shared,
-            obs,
-            robots,
-            &mut self.scratch.rows,
-            &mut self.scratch.q,
-            actions,
-        );
-        for a in actions.iter_mut().take(n) {
-            if rng.random::<f64>() < epsilon {
-                *a = rng.random_range(0..ACTIONS);
-            }
-        }
+    /// The networks' variables (what a checkpoint saves).
+    pub fn stores(&self) -> Vec<&nn::VarStore> {
+        self.nets.iter().map(|n| &n.vs).collect()
     }
 
     /// Stores one (n-step) transition of learning robot slot `k`; see
@@ -605,20 +277,19 @@ impl Dqn {
             if mine.is_empty() {
                 continue;
             }
-            self.scratch.rows.clear();
+            self.rows.clear();
             for &i in &mine {
-                self.scratch
-                    .rows
+                self.rows
                     .extend_from_slice(&obs[i * OBS_DIM..(i + 1) * OBS_DIM]);
             }
             let m = mine.len();
-            let x = Tensor::from_slice(&self.scratch.rows).view([m as i64, OBS_DIM as i64]);
+            let x = Tensor::from_slice(&self.rows).view([m as i64, OBS_DIM as i64]);
             let y = tch::no_grad(|| net.q(&x));
-            self.scratch.q.resize(m * ACTIONS, 0.0);
-            y.copy_data(&mut self.scratch.q, m * ACTIONS);
+            self.q.resize(m * ACTIONS, 0.0);
+            y.copy_data(&mut self.q, m * ACTIONS);
             for (j, &i) in mine.iter().enumerate() {
                 q[i * ACTIONS..(i + 1) * ACTIONS]
-                    .copy_from_slice(&self.scratch.q[j * ACTIONS..(j + 1) * ACTIONS]);
+                    .copy_from_slice(&self.q[j * ACTIONS..(j + 1) * ACTIONS]);
             }
             if self.cfg.shared || self.nets.len() == 1 {
                 break;
@@ -636,8 +307,7 @@ impl Dqn {
                 continue;
             }
             for _ in 0..self.cfg.updates_per_step {
-                let (o, a, r, o2, d, mask) =
-                    self.replays[i].sample(self.cfg.batch, rng, &mut self.scratch);
+                let (o, a, r, o2, d, mask) = self.replays[i].sample(self.cfg.batch, rng);
                 let q = self.nets[i]
                     .q(&o)
                     .gather(1, &a.unsqueeze(1), false)
@@ -675,48 +345,6 @@ impl Dqn {
     }
 }
 
-/// Greedy actions from Q-networks: row `i` of `obs` is learning robot
-/// `i % robots`; with per-robot networks the rows of each robot are gathered
-/// and evaluated in one forward pass.
-pub(crate) fn greedy_actions(
-    nets: &[QNet],
-    shared: bool,
-    obs: &[f32],
-    robots: usize,
-    rows: &mut Vec<f32>,
-    q: &mut Vec<f32>,
-    actions: &mut [usize],
-) {
-    let n = actions.len();
-    if shared || nets.len() == 1 {
-        forward_argmax(&nets[0], obs, n, q, actions);
-        return;
-    }
-    let per = n / robots;
-    let mut acts = vec![0usize; per];
-    for (k, net) in nets.iter().enumerate().take(robots) {
-        rows.clear();
-        for j in 0..per {
-            let i = j * robots + k;
-            rows.extend_from_slice(&obs[i * OBS_DIM..(i + 1) * OBS_DIM]);
-        }
-        forward_argmax(net, rows, per, q, &mut acts);
-        for j in 0..per {
-            actions[j * robots + k] = acts[j];
-        }
-    }
-}
-
-fn forward_argmax(net: &QNet, obs: &[f32], n: usize, q: &mut Vec<f32>, out: &mut [usize]) {
-    let x = Tensor::from_slice(&obs[..n * OBS_DIM]).view([n as i64, OBS_DIM as i64]);
-    let qs = tch::no_grad(|| net.q(&x));
-    q.resize(n * ACTIONS, 0.0);
-    qs.copy_data(q, n * ACTIONS);
-    for (i, o) in out.iter_mut().enumerate().take(n) {
-        *o = argmax(&q[i * ACTIONS..(i + 1) * ACTIONS]);
-    }
-}
-
 /// An epsilon-greedy choice from one row of Q-values: with probability
 /// `epsilon` a uniformly random allowed action, else the best allowed one
 /// (`shoot` is allowed when `shoot_ok`).
@@ -740,6 +368,7 @@ pub use naosoccer_policy::actions::argmax;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::DqnPreset;
 
     #[test]
     fn td_target_is_reward_plus_discounted_max_unless_done() {
@@ -779,17 +408,6 @@ mod tests {
                 "q0.l4.weight"
             ]
         );
-    }
-
-    #[test]
-    fn replay_overwrites_the_oldest_transition() {
-        let mut r = Replay::new(2);
-        let o = [0.0; OBS_DIM];
-        for a in 0..3 {
-            r.push(&o, a, a as f32, &o, 0.99, true);
-        }
-        assert_eq!(r.len(), 2);
-        assert_eq!(r.actions, vec![2, 1]);
     }
 
     fn values(t: &Tensor) -> Vec<f32> {
@@ -895,75 +513,6 @@ mod tests {
             seen[epsilon_greedy(&q, true, 1.0, &mut rng)] += 1;
         }
         assert!(seen.iter().all(|&c| c > 300), "{seen:?}");
-    }
-
-    /// Obs rows marked by their first feature.
-    fn marked(x: f32) -> Vec<f32> {
-        let mut o = vec![0.0; OBS_DIM];
-        o[0] = x;
-        o
-    }
-
-    fn collect(
-        ns: &mut NStep,
-        row: usize,
-        step: (f32, usize, f32, f32, bool),
-    ) -> Vec<(f32, usize, f32, f32)> {
-        let mut out = Vec::new();
-        ns.push(
-            row,
-            &marked(step.0),
-            step.1,
-            step.2,
-            step.3,
-            step.4,
-            &mut |t| out.push((t.obs[0], t.action, t.ret, t.discount)),
-        );
-        out
-    }
-
-    #[test]
-    fn n_step_returns_multiply_varying_discounts_and_stop_at_the_episode_end() {
-        let mut ns = NStep::new(3, 2);
-        // Row 0: steps with discounts 0.9, 0.5, 0.8 (decisions of unequal length).
-        assert!(collect(&mut ns, 0, (10.0, 1, 1.0, 0.9, false)).is_empty());
-        assert!(collect(&mut ns, 0, (11.0, 2, 2.0, 0.5, false)).is_empty());
-        // Row 1 is independent of row 0.
-        assert!(collect(&mut ns, 1, (50.0, 0, 100.0, 0.1, false)).is_empty());
-        let out = collect(&mut ns, 0, (12.0, 3, 4.0, 0.8, false));
-        // R = 1 + 0.9*2 + 0.9*0.5*4 = 4.6, bootstrap discount 0.9*0.5*0.8 = 0.36.
-        assert_eq!(out.len(), 1);
-        let (o, a, ret, disc) = out[0];
-        assert_eq!((o, a), (10.0, 1));
-        assert!(
-            (ret - 4.6).abs() < 1e-6 && (disc - 0.36).abs() < 1e-6,
-            "{out:?}"
-        );
-        // The episode ends: the three pending steps leave with what is left
-        // of their returns and nothing to bootstrap.
-        let out = collect(&mut ns, 0, (13.0, 4, 8.0, 0.7, true));
-        assert_eq!(out.len(), 3, "{out:?}");
-        let expected = [
-            (11.0, 2, 2.0 + 0.5 * 4.0 + 0.5 * 0.8 * 8.0),
-            (12.0, 3, 4.0 + 0.8 * 8.0),
-            (13.0, 4, 8.0),
-        ];
-        for ((o, a, ret, disc), (eo, ea, er)) in out.iter().zip(expected) {
-            assert_eq!((*o, *a, *disc), (eo, ea, 0.0));
-            assert!((ret - er).abs() < 1e-5, "{out:?}");
-        }
-        // A new episode starts empty.
-        assert!(collect(&mut ns, 0, (20.0, 0, 1.0, 0.9, false)).is_empty());
-        // One-step returns are the transitions themselves.
-        let mut one = NStep::new(1, 1);
-        assert_eq!(
-            collect(&mut one, 0, (1.0, 2, 3.0, 0.99, false)),
-            [(1.0, 2, 3.0, 0.99)]
-        );
-        assert_eq!(
-            collect(&mut one, 0, (2.0, 2, 3.0, 0.99, true)),
-            [(2.0, 2, 3.0, 0.0)]
-        );
     }
 
     #[test]

@@ -1,38 +1,75 @@
-//! Learning: the MDP over `referee::Match`, DQN and PPO on tch. The only
-//! crate that links libtorch; playing a trained team needs only
-//! `naosoccer-policy` (re-exported here as [`obs`], [`eval`] and the
-//! [`LearnedPolicy`] the trainer's opponents use).
+//! Learning: team policies for `referee::Match`, trained with PPO and DQN
+//! on tch. The only crate that links libtorch; playing a trained team needs
+//! only `naosoccer-policy` (re-exported here as [`obs`], [`eval`] and the
+//! [`LearnedPolicy`] the trainer's opponents use). The reward is the
+//! referee's (`Match::rewards`): its weights are part of the match
+//! configuration.
 //!
-//! - [`obs`]: the observation vector (versioned layout, see docs/LEARNING.md).
-//! - [`env`]: many matches in process, stepped together; the learning team's
-//!   robots flattened into one batch; built-in, frozen or self-play opponents.
-//! - [`ppo`], [`dqn`]: the two algorithms as the paper describes them (PPO
-//!   also with a CleanRL preset).
-//! - [`config`]: a training run's configuration (its `config.json`).
-//! - [`schedule`]: opponent curricula, as written on the command line.
-//! - [`schedule_runner`]: a schedule played: its stages and the pool of past
-//!   snapshots.
-//! - [`train`]: training runs (metrics CSV, safetensors checkpoints, resume).
-//! - [`policy`]: the trainer's networks as players (self-play snapshots,
-//!   frozen opponents), through `naosoccer-policy`'s forward pass.
-//! - [`eval`]: many matches between two teams; Table I with 95% CIs.
-//! - [`plot`]: training curves (Figures 4-6).
+//! Three parts, and where a change goes.
 //!
-//! The reward is the referee's (`Match::rewards`): its weights are part of the
-//! match configuration.
+//! **The environment**: what a learner sees and does.
+//! - [`mod@env`]: many matches in process, stepped together; the learning
+//!   team's robots as one batch of rows; built-in, frozen, self-play or
+//!   mixed opponents; drills.
+//! - [`env::decisions`]: the decision-level MDP over the matches, and the
+//!   only place that holds actions and keeps decisions open: who decides
+//!   this tick, under which masks; each closed decision comes out as one
+//!   transition (observation, action, discounted reward, discount, how it
+//!   ended).
+//! - [`obs`]: the observation vector (versioned layout, see
+//!   docs/LEARNING.md).
+//!
+//! **The run harness**: what a run needs that is not the algorithm.
+//! - [`mod@train`]: the front door: the learner a configuration asks for;
+//!   resume.
+//! - [`run`]: the run directory, metrics rows, checkpoints, self-play
+//!   snapshots and the opponent schedule as played (its `Run`); the
+//!   environment built from a configuration ([`run::setup`]); resumable
+//!   checkpoints ([`run::resume`]).
+//! - [`metrics`]: the rows of `metrics.csv` and the tally behind them.
+//! - [`config`]: a run's configuration (its `config.json`); [`schedule`]
+//!   and [`schedule_runner`]: opponent curricula; [`warm_start`]: a PPO
+//!   run that starts from a trained team.
+//!
+//! **The learners**: one file each, read top to bottom: the loop, acting,
+//! storing, updating.
+//! - [`ppo`]: PPO for a team on the decision-level MDP (`--preset team`).
+//! - [`ppo_paper`]: PPO with every robot acting every tick: the paper's
+//!   Algorithm 2 and CleanRL's `ppo.py` (`paper`, `cleanrl`).
+//! - [`dqn`]: DQN on the decision-level MDP (`--preset team`); what it
+//!   stores, n-step returns and the replay ring, is [`replay`].
+//! - [`dqn_paper`]: the paper's Algorithm 1, every robot acting every tick.
+//! - What they share: [`nets`] (the networks, value normalisation) and
+//!   [`adam`] (an Adam whose state a checkpoint saves).
+//!
+//! A third algorithm is one new file beside these: a `train` that builds
+//! the environment (`run::make_env`), acts on [`env::decisions::Decisions`],
+//! stores and updates, and drives a `run::Run` for everything else; its
+//! settings join [`config`] (an [`Algo`] variant) and one line of
+//! [`train::train`] sends its runs to it.
+//!
+//! Around them: [`policy`], the trainer's networks as players (self-play
+//! snapshots, frozen opponents); [`eval`], many matches between two teams;
+//! [`plot`], training curves (Figures 4-6).
 
 pub mod adam;
 pub mod config;
 pub mod dqn;
+pub mod dqn_paper;
 pub mod env;
 mod error;
+pub mod metrics;
 pub mod nets;
 pub mod plot;
 pub mod policy;
 pub mod ppo;
+pub mod ppo_paper;
+pub mod replay;
+pub mod run;
 pub mod schedule;
 pub mod schedule_runner;
 pub mod train;
+pub mod warm_start;
 
 pub use config::{Algo, OpponentSpec, TrainConfig};
 pub use error::LearnError;

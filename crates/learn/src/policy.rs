@@ -15,8 +15,8 @@ pub use naosoccer_policy::learned::{resolve_run, ActMode, LearnedPolicy, PlayCon
 pub use naosoccer_policy::{load_policy, load_policy_for_match, Weights};
 
 use crate::config::{run_scale, Algo, TrainConfig};
-use crate::dqn::QNet;
-use crate::ppo::ActorCritic;
+use crate::nets::ActorCritic;
+use crate::nets::QNet;
 use crate::LearnError;
 
 /// What playing reads of a training configuration (the fields of its

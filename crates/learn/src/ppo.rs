@@ -1,303 +1,153 @@
-//! PPO, actor-critic.
+//! PPO for a team (`team` preset): actor-critic on the decision-level MDP
+//! ([`crate::env::decisions`]). A robot decides only when it is free to act,
+//! movement persists, `shoot` (and what [`DecisionConfig`] bans) is masked,
+//! and a transition spans the ticks from one decision to the next: returns
+//! are discounted by the time that elapsed (`gamma^dt`, GAE with
+//! `(gamma lambda)^dt`), bootstrapped at rollout edges and where a drill
+//! cut an episode. On top of CleanRL's machinery (minibatches, per-batch
+//! advantage normalisation, gradient clipping): value normalisation, a KL
+//! early stop, learning-rate and entropy schedules, and an optional
+//! centralised critic (MAPPO: the critic reads the whole team's
+//! observation vectors).
 //!
-//! Two presets:
-//! - `paper` (default): the paper's Algorithm 2 as the widely copied
-//!   PPO-PyTorch code does it — discounted returns computed backwards and
-//!   normalised, `A = R_norm - V(s)`, clipped surrogate, MSE value loss,
-//!   entropy bonus, `K` epochs over the full batch, Adam with separate
-//!   learning rates for actor (3e-4) and critic (1e-3), 64-64 tanh networks.
-//! - `cleanrl`: GAE(lambda) with a bootstrapped value at the rollout's end,
-//!   per-minibatch advantage normalisation, gradient-norm clipping and
-//!   orthogonal initialisation (CleanRL's `ppo.py`).
-//! - `team`: the decision-level MDP ([`DecisionConfig`]): a robot decides
-//!   only when it is free to act, movement persists for `persist` ticks,
-//!   `shoot` is masked while the ball is out of kick reach, and returns are
-//!   discounted by the time that elapsed (`gamma^dt`, GAE with
-//!   `(gamma lambda)^dt`), bootstrapped at rollout edges; on top of
-//!   cleanrl's machinery: value normalisation, a KL early stop, learning-rate
-//!   and entropy schedules and an optional centralised critic (MAPPO: the
-//!   critic reads the whole team's observation vectors).
+//! Read top to bottom: the loop ([`train`]), acting ([`Ppo::act_masked`],
+//! [`Ppo::critic_values`]), storing ([`Transitions`]), the advantage
+//! ([`Transitions::gae`]) and the update ([`Ppo::update_decisions`]). The
+//! run directory, metrics, opponents and checkpoints are the harness's
+//! ([`crate::run`]); the per-tick presets (`paper`, `cleanrl`) are
+//! [`crate::ppo_paper`].
 
-use rand::Rng;
+use std::path::Path;
+
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
-use tch::nn::{self, OptimizerConfig};
+use tch::nn;
 use tch::{Kind, Tensor};
 
 use crate::adam::Adam;
-use crate::nets::{Activation, InitScheme, Mlp};
-use crate::obs::{ObsScale, OBS_DIM};
+use crate::config::{run_scale, PpoConfig, TrainConfig};
+use crate::env::decisions::{Closed, Decisions, End};
+use crate::metrics::Progress;
+use crate::nets::{ActorCritic, RunningNorm};
+use crate::obs::ObsScale;
+use crate::run::resume::{read_checkpoint, ResumeState};
+use crate::run::{make_env, Run, TrainSummary};
+use crate::warm_start::{init_weights, SUPPORT_INIT_BIAS};
 use crate::LearnError;
 
 pub use naosoccer_policy::actions::{
     action_count, action_mask, sample, shoot_mask, DecisionConfig, ACTIONS, PASS, SHOOT, STAY,
 };
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Preset {
-    #[default]
-    Paper,
-    Cleanrl,
-    Team,
-}
-
-impl std::str::FromStr for Preset {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "paper" => Ok(Preset::Paper),
-            "cleanrl" => Ok(Preset::Cleanrl),
-            "team" => Ok(Preset::Team),
-            o => Err(format!(
-                "unknown PPO preset {o:?} (expected paper, cleanrl or team)"
-            )),
+/// Trains a team-preset run into `out`, or goes on from `resume` (a
+/// checkpoint of the run in `out`) as if it had not stopped.
+///
+/// Every tick each learning robot either decides (a forward pass; its open
+/// transition closes with the new decision's value) or holds its action;
+/// an episode's end closes it with no bootstrap, a drill's cut and the
+/// rollout's edge with the critic's value of the state reached. A rollout
+/// also ends with the episodes (all matches have one length and end
+/// together): checkpoints fall on episode boundaries, where a resumed run
+/// can rebuild the matches exactly.
+pub fn train(
+    cfg: &TrainConfig,
+    out: &Path,
+    resume: Option<ResumeState>,
+    progress: &mut dyn FnMut(&Progress<'_>),
+) -> Result<TrainSummary, LearnError> {
+    let decision = cfg
+        .ppo
+        .decision
+        .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
+    let mut env = make_env(cfg)?;
+    let scale = run_scale(cfg);
+    let mut ppo = Ppo::new(cfg.ppo.clone(), &scale, cfg.learners.len())?;
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let mut run = match &resume {
+        None => {
+            if let Some(from) = &cfg.init_from {
+                let pass_from = cfg.init_pass_from.unwrap_or(naosoccer_proto::Action::Shoot);
+                let support_bias = cfg.init_support_bias.unwrap_or(SUPPORT_INIT_BIAS);
+                init_weights(&mut ppo, from, pass_from, support_bias)?;
+            }
+            Run::start(cfg, out, &mut env, &[&ppo.net.vs], true, progress)?
+        }
+        Some(st) => {
+            read_checkpoint(out, st, &mut ppo.net.vs, ppo.adam.as_mut())?;
+            ppo.value_norm = st.value_norm;
+            rng = st.rng()?;
+            Run::resume(cfg, out, st, &mut env, progress)?
+        }
+    };
+    let rows = env.rows();
+    let cw = ppo.net.critic_dim;
+    let mut dec = Decisions::<Act>::new(&env, decision, scale, cw, cfg.ppo.gamma as f32);
+    let mut tr = Transitions::default();
+    // Each robot's last transition, while the next one of its stream (the
+    // decision that followed) is open.
+    let mut link: Vec<Option<usize>> = vec![None; rows];
+    let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
+    let mut acts = Vec::new();
+    let (mut cut_rows, mut cut_cobs, mut cut_val) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut boot, mut edge_cobs, mut edge_val) = (vec![0.0f32; rows], Vec::new(), vec![0.0; rows]);
+    while !run.done() {
+        tr.clear();
+        let mut ticks = 0usize;
+        let mut boundary = false;
+        while ticks < cfg.ppo.rollout && !boundary {
+            ticks += 1;
+            let asked = dec.ask(&env);
+            let k = asked.rows.len();
+            dec_act.resize(k, 0);
+            dec_logp.resize(k, 0.0);
+            dec_val.resize(k, 0.0);
+            let (obs, ok, banned) = (&asked.obs, &asked.shoot_ok, &asked.banned);
+            ppo.act_masked(obs, ok, banned, &mut rng, &mut dec_act, &mut dec_logp);
+            ppo.critic_values(&asked.critic_obs, &mut dec_val);
+            acts.clear();
+            acts.extend(
+                dec_logp
+                    .iter()
+                    .zip(&dec_val)
+                    .map(|(&logp, &value)| Act { logp, value }),
+            );
+            dec.decide(&env, &dec_act, &acts, &mut |c| {
+                let End::Decided { next, .. } = c.end else {
+                    unreachable!("a decision closes here only by the next one")
+                };
+                tr.push(&c, dec_val[next], false, &mut link);
+            });
+            let finished = env.step(dec.actions())?;
+            // Episodes cut short (pass drills) are bootstrapped with the
+            // critic's value of the state where they were cut.
+            dec.cut_critic_rows(&env, &mut cut_rows, &mut cut_cobs);
+            cut_val.resize(cut_rows.len(), 0.0);
+            ppo.critic_values(&cut_cobs, &mut cut_val);
+            for (&r, &v) in cut_rows.iter().zip(&cut_val) {
+                boot[r] = v;
+            }
+            dec.observe(&env, &mut |c| match c.end {
+                End::Cut => tr.push(&c, boot[c.row], false, &mut link),
+                _ => tr.push(&c, 0.0, true, &mut link),
+            });
+            run.observe(env.rewards(), finished);
+            boundary = env.dones().iter().all(|&d| d);
+        }
+        // The rollout's edge: open transitions end here, bootstrapped with
+        // the critic's value of the state they reached.
+        dec.critic_rows(&env, &mut edge_cobs);
+        ppo.critic_values(&edge_cobs, &mut edge_val);
+        dec.cut(&mut |c| tr.push(&c, edge_val[c.row], false, &mut link));
+        let before = run.count(ticks * rows);
+        let stats = ppo.update_decisions(&tr, before as f64 / cfg.steps.max(1) as f64, &mut rng);
+        run.log(&env, (stats.policy_loss, stats.value_loss, stats.entropy))?;
+        run.refresh_opponents(before, &mut env, &[&ppo.net.vs])?;
+        if boundary && run.checkpoint_due() {
+            let adam = ppo.adam.as_ref();
+            run.checkpoint_resumable(&env, &rng, &ppo.net.vs, adam, ppo.value_norm)?;
         }
     }
-}
-
-/// PPO's hyperparameters. `PpoConfig::paper()` and `PpoConfig::cleanrl()`
-/// give the presets; docs/LEARNING.md says where each value comes from.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PpoConfig {
-    pub preset: Preset,
-    pub gamma: f64,
-    /// GAE's lambda (cleanrl preset only).
-    pub gae_lambda: f64,
-    pub clip: f64,
-    /// Value-loss weight `c1`.
-    pub value_coef: f64,
-    /// Entropy-bonus weight `c2`.
-    pub entropy_coef: f64,
-    pub lr_actor: f64,
-    pub lr_critic: f64,
-    /// Passes over each rollout.
-    pub epochs: usize,
-    /// Minibatches a pass is split into (1 = the full batch).
-    pub minibatches: usize,
-    /// Control ticks each match plays between updates.
-    pub rollout: usize,
-    /// Gradient-norm clip (cleanrl preset), none when `None`.
-    pub max_grad_norm: Option<f64>,
-    pub hidden: Vec<usize>,
-    /// Stop an update's passes once the approximate KL divergence from the
-    /// rollout's policy exceeds 1.5 times this (team preset).
-    #[serde(default)]
-    pub target_kl: Option<f64>,
-    /// The critic predicts returns normalised by their running mean and
-    /// standard deviation (team preset).
-    #[serde(default)]
-    pub value_norm: bool,
-    /// Learning rates fall linearly to `lr_end_fraction` of their start
-    /// over the run (team preset); constant when `None`.
-    #[serde(default)]
-    pub lr_end_fraction: Option<f64>,
-    /// The entropy weight moves linearly from `entropy_coef` to this over the
-    /// run; constant when `None`.
-    #[serde(default)]
-    pub entropy_coef_end: Option<f64>,
-    /// MAPPO: the critic reads the observation vectors of all the team's
-    /// learning robots (the acting robot's first), not only the acting one's.
-    #[serde(default)]
-    pub central_critic: bool,
-    /// The decision-level MDP; `None`: every robot decides every tick.
-    #[serde(default)]
-    pub decision: Option<DecisionConfig>,
-}
-
-impl PpoConfig {
-    pub fn paper() -> PpoConfig {
-        PpoConfig {
-            preset: Preset::Paper,
-            gamma: 0.99,
-            gae_lambda: 1.0,
-            clip: 0.2,
-            value_coef: 0.5,
-            entropy_coef: 0.01,
-            lr_actor: 3e-4,
-            lr_critic: 1e-3,
-            epochs: 80,
-            minibatches: 1,
-            rollout: 128,
-            max_grad_norm: None,
-            hidden: vec![64, 64],
-            target_kl: None,
-            value_norm: false,
-            lr_end_fraction: None,
-            entropy_coef_end: None,
-            central_critic: false,
-            decision: None,
-        }
-    }
-
-    pub fn cleanrl() -> PpoConfig {
-        PpoConfig {
-            preset: Preset::Cleanrl,
-            gamma: 0.99,
-            gae_lambda: 0.95,
-            clip: 0.2,
-            value_coef: 0.5,
-            entropy_coef: 0.01,
-            lr_actor: 2.5e-4,
-            lr_critic: 2.5e-4,
-            epochs: 4,
-            minibatches: 4,
-            rollout: 128,
-            max_grad_norm: Some(0.5),
-            hidden: vec![64, 64],
-            target_kl: None,
-            value_norm: false,
-            lr_end_fraction: None,
-            entropy_coef_end: None,
-            central_critic: false,
-            decision: None,
-        }
-    }
-
-    /// The decision-level MDP with the fixes: per-tick gamma 0.995 (a
-    /// 200-tick, 20-second horizon), GAE lambda 0.95 per tick, 4 x 4
-    /// minibatch passes with a KL stop, value normalisation, annealed
-    /// learning rate and entropy, larger networks.
-    pub fn team() -> PpoConfig {
-        PpoConfig {
-            preset: Preset::Team,
-            gamma: 0.995,
-            gae_lambda: 0.95,
-            clip: 0.2,
-            value_coef: 0.5,
-            entropy_coef: 0.01,
-            lr_actor: 3e-4,
-            lr_critic: 3e-4,
-            epochs: 4,
-            minibatches: 4,
-            rollout: 256,
-            max_grad_norm: Some(0.5),
-            hidden: vec![128, 128],
-            target_kl: Some(0.02),
-            value_norm: true,
-            lr_end_fraction: Some(0.1),
-            entropy_coef_end: Some(0.002),
-            central_critic: false,
-            decision: Some(DecisionConfig {
-                persist: 3,
-                mask_shoot: true,
-                pass: false,
-                support: false,
-                support_hold: 0,
-                chasers: 0,
-                support_only: false,
-                support_spot: Default::default(),
-                approach: false,
-                approach_only: false,
-            }),
-        }
-    }
-
-    pub fn preset(p: Preset) -> PpoConfig {
-        match p {
-            Preset::Paper => PpoConfig::paper(),
-            Preset::Cleanrl => PpoConfig::cleanrl(),
-            Preset::Team => PpoConfig::team(),
-        }
-    }
-
-    /// Whether `shoot` is masked out of reach.
-    pub fn masks_shoot(&self) -> bool {
-        self.decision.is_some_and(|d| d.mask_shoot)
-    }
-
-    /// How many actions the actor chooses among: 5, 6 with `pass`, 7 with
-    /// `support` too.
-    pub fn actions(&self) -> usize {
-        action_count(self.decision)
-    }
-}
-
-/// The actor (action logits) and critic (state value), in one `VarStore`:
-/// the actor's variables in optimiser group 0, the critic's in group 1, so
-/// one Adam runs both at their own learning rates.
-pub struct ActorCritic {
-    pub vs: nn::VarStore,
-    actor: Mlp,
-    critic: Mlp,
-    /// Input widths: the layout's length, and the critic's (a multiple of it
-    /// with a centralised critic).
-    pub obs_dim: usize,
-    pub critic_dim: usize,
-}
-
-impl ActorCritic {
-    /// The networks of a run: observations of `scale`'s layout, `learners`
-    /// robots per team (the centralised critic's input).
-    pub fn for_run(cfg: &PpoConfig, scale: &ObsScale, learners: usize) -> ActorCritic {
-        let d = scale.dim();
-        let c = if cfg.central_critic {
-            d * learners.max(1)
-        } else {
-            d
-        };
-        ActorCritic::new(cfg, d, c)
-    }
-
-    pub fn new(cfg: &PpoConfig, obs_dim: usize, critic_dim: usize) -> ActorCritic {
-        let vs = nn::VarStore::new(tch::Device::Cpu);
-        let (ai, ci) = match cfg.preset {
-            Preset::Paper => (InitScheme::Default, InitScheme::Default),
-            Preset::Cleanrl | Preset::Team => (
-                InitScheme::Orthogonal { output_gain: 0.01 },
-                InitScheme::Orthogonal { output_gain: 1.0 },
-            ),
-        };
-        let root = vs.root();
-        let actor = Mlp::new(
-            &(root.set_group(0) / "actor"),
-            obs_dim,
-            &cfg.hidden,
-            cfg.actions(),
-            Activation::Tanh,
-            ai,
-        );
-        let critic = Mlp::new(
-            &(root.set_group(1) / "critic"),
-            critic_dim,
-            &cfg.hidden,
-            1,
-            Activation::Tanh,
-            ci,
-        );
-        ActorCritic {
-            vs,
-            actor,
-            critic,
-            obs_dim,
-            critic_dim,
-        }
-    }
-
-    /// `n` rows of width `OBS_DIM` as the actor's input (their layout prefix).
-    pub fn actor_input(&self, rows: &[f32], n: usize) -> Tensor {
-        rows_tensor(rows, n, OBS_DIM, self.obs_dim)
-    }
-
-    /// Action logits, `[n, ACTIONS]`.
-    pub fn logits(&self, obs: &Tensor) -> Tensor {
-        self.actor.forward(obs)
-    }
-
-    /// State values, `[n]`.
-    pub fn value(&self, obs: &Tensor) -> Tensor {
-        self.critic.forward(obs).squeeze_dim(-1)
-    }
-}
-
-/// `n` rows of `width` floats as an `[n, dim]` tensor (the first `dim` of each).
-pub fn rows_tensor(rows: &[f32], n: usize, width: usize, dim: usize) -> Tensor {
-    let x = Tensor::from_slice(&rows[..n * width]).view([n as i64, width as i64]);
-    if dim == width {
-        x
-    } else {
-        x.narrow(1, 0, dim as i64).contiguous()
-    }
+    run.finish(&[&ppo.net.vs])
 }
 
 /// The clipped surrogate objective, as a loss to minimise:
@@ -308,78 +158,6 @@ pub fn clipped_surrogate_loss(logp: &Tensor, logp_old: &Tensor, adv: &Tensor, cl
     let s1 = &ratio * adv;
     let s2 = ratio.clamp(1.0 - clip, 1.0 + clip) * adv;
     -s1.min_other(&s2).mean(Kind::Float)
-}
-
-/// Discounted returns computed backwards, restarting at episode ends, for a
-/// rollout stored time-major (`[t][stream]`): `R_t = r_t + gamma R_{t+1} (1 - done_t)`.
-/// No bootstrap past the rollout's end (the paper's estimator).
-pub fn discounted_returns(rewards: &[f32], dones: &[f32], streams: usize, gamma: f32) -> Vec<f32> {
-    let steps = rewards.len() / streams;
-    let mut out = vec![0.0; rewards.len()];
-    let mut acc = vec![0.0f32; streams];
-    for t in (0..steps).rev() {
-        for (s, a) in acc.iter_mut().enumerate() {
-            let i = t * streams + s;
-            *a = rewards[i] + gamma * *a * (1.0 - dones[i]);
-            out[i] = *a;
-        }
-    }
-    out
-}
-
-/// Generalised advantage estimation over a time-major rollout, bootstrapped
-/// with `last_values` (the values of the observations after the last step).
-/// Returns `(advantages, returns = advantages + values)`.
-pub fn gae(
-    rewards: &[f32],
-    values: &[f32],
-    dones: &[f32],
-    last_values: &[f32],
-    gamma: f32,
-    lambda: f32,
-) -> (Vec<f32>, Vec<f32>) {
-    let streams = last_values.len();
-    let steps = rewards.len() / streams;
-    let mut adv = vec![0.0; rewards.len()];
-    let mut last = vec![0.0f32; streams];
-    for t in (0..steps).rev() {
-        for s in 0..streams {
-            let i = t * streams + s;
-            let next_v = if t + 1 == steps {
-                last_values[s]
-            } else {
-                values[i + streams]
-            };
-            let nonterminal = 1.0 - dones[i];
-            let delta = rewards[i] + gamma * next_v * nonterminal - values[i];
-            last[s] = delta + gamma * lambda * nonterminal * last[s];
-            adv[i] = last[s];
-        }
-    }
-    let ret = adv.iter().zip(values).map(|(a, v)| a + v).collect();
-    (adv, ret)
-}
-
-/// One rollout: every learner robot's transitions, time-major.
-#[derive(Debug, Default)]
-pub struct Rollout {
-    pub obs: Vec<f32>,
-    pub actions: Vec<i64>,
-    pub logp: Vec<f32>,
-    pub values: Vec<f32>,
-    pub rewards: Vec<f32>,
-    pub dones: Vec<f32>,
-}
-
-impl Rollout {
-    pub fn clear(&mut self) {
-        self.obs.clear();
-        self.actions.clear();
-        self.logp.clear();
-        self.values.clear();
-        self.rewards.clear();
-        self.dones.clear();
-    }
 }
 
 /// What one update reports.
@@ -394,12 +172,14 @@ pub struct UpdateStats {
     pub passes: u32,
 }
 
-/// The PPO learner: networks, optimiser and the sampling RNG.
+/// The PPO learner: the networks, their optimiser and the value
+/// normalisation.
 pub struct Ppo {
     pub cfg: PpoConfig,
     pub net: ActorCritic,
-    opt: nn::Optimizer,
-    probs: Vec<f32>,
+    /// The per-tick presets' optimiser ([`crate::ppo_paper`]).
+    pub(crate) opt: nn::Optimizer,
+    pub(crate) probs: Vec<f32>,
     /// Running statistics of the value targets (`value_norm`).
     pub value_norm: RunningNorm,
     /// The decision-level updates' optimiser (its state is checkpointed,
@@ -413,18 +193,7 @@ impl Ppo {
     /// robots per team.
     pub fn new(cfg: PpoConfig, scale: &ObsScale, learners: usize) -> Result<Ppo, LearnError> {
         let net = ActorCritic::for_run(&cfg, scale, learners);
-        let eps = if cfg.preset == Preset::Cleanrl {
-            1e-5
-        } else {
-            1e-8
-        };
-        let mut opt = nn::Adam {
-            eps,
-            ..Default::default()
-        }
-        .build(&net.vs, cfg.lr_actor)?;
-        opt.set_lr_group(0, cfg.lr_actor);
-        opt.set_lr_group(1, cfg.lr_critic);
+        let opt = crate::ppo_paper::optimiser(&cfg, &net.vs)?;
         let adam = cfg.decision.is_some().then(|| {
             Adam::new(&net.vs, vec![cfg.lr_actor, cfg.lr_critic], 1e-5, |name| {
                 usize::from(!name.starts_with("actor"))
@@ -573,17 +342,11 @@ impl Ppo {
                     (lr.exp() - 1.0 - &lr).mean(Kind::Float)
                 });
                 let kl = f64::try_from(&kl).unwrap_or(f64::NAN);
-                accumulate(
-                    &mut stats,
-                    UpdateStats {
-                        policy_loss: f64::try_from(&pl).unwrap_or(f64::NAN),
-                        value_loss: f64::try_from(&vl).unwrap_or(f64::NAN),
-                        entropy: f64::try_from(&entropy).unwrap_or(f64::NAN),
-                        approx_kl: kl,
-                        passes: 0,
-                    },
-                    &mut count,
-                );
+                stats.policy_loss += f64::try_from(&pl).unwrap_or(f64::NAN);
+                stats.value_loss += f64::try_from(&vl).unwrap_or(f64::NAN);
+                stats.entropy += f64::try_from(&entropy).unwrap_or(f64::NAN);
+                stats.approx_kl += kl;
+                count += 1.0;
                 stats.passes += 1;
                 if cfg.target_kl.is_some_and(|t| kl > 1.5 * t) {
                     break 'passes;
@@ -599,207 +362,14 @@ impl Ppo {
         }
         stats
     }
-
-    /// Samples one action per row of `obs` (`n` rows of `OBS_DIM`) in one
-    /// forward pass; writes actions, their log-probabilities and the values.
-    pub fn act(
-        &mut self,
-        obs: &[f32],
-        rng: &mut ChaCha8Rng,
-        actions: &mut [usize],
-        logp: &mut [f32],
-        values: &mut [f32],
-    ) {
-        let n = actions.len();
-        let x = self.net.actor_input(obs, n);
-        let (p, v) = tch::no_grad(|| {
-            (
-                self.net.logits(&x).softmax(-1, Kind::Float),
-                self.net.value(&x),
-            )
-        });
-        self.probs.resize(n * ACTIONS, 0.0);
-        p.copy_data(&mut self.probs, n * ACTIONS);
-        v.copy_data(values, n);
-        for i in 0..n {
-            let row = &self.probs[i * ACTIONS..(i + 1) * ACTIONS];
-            let a = sample(row, rng.random::<f32>());
-            actions[i] = a;
-            logp[i] = row[a].max(1e-12).ln();
-        }
-    }
-
-    /// Values of `n` observations (the bootstrap for GAE).
-    pub fn values(&self, obs: &[f32], out: &mut [f32]) {
-        let n = out.len();
-        let x = self.net.actor_input(obs, n);
-        tch::no_grad(|| self.net.value(&x)).copy_data(out, n);
-    }
-
-    /// One PPO update on a rollout of `streams` robots. `last_values` are the
-    /// critic's values of the observations after the rollout (cleanrl only).
-    pub fn update(
-        &mut self,
-        ro: &Rollout,
-        streams: usize,
-        last_values: &[f32],
-        rng: &mut ChaCha8Rng,
-    ) -> UpdateStats {
-        let n = ro.actions.len();
-        let cfg = self.cfg.clone();
-        let obs = self.net.actor_input(&ro.obs, n);
-        let actions = Tensor::from_slice(&ro.actions);
-        let logp_old = Tensor::from_slice(&ro.logp);
-        let mut stats = UpdateStats::default();
-        let mut count = 0.0;
-        match cfg.preset {
-            Preset::Paper => {
-                let r = discounted_returns(&ro.rewards, &ro.dones, streams, cfg.gamma as f32);
-                let r = Tensor::from_slice(&r);
-                let r_norm = (&r - r.mean(Kind::Float)) / (r.std(true) + 1e-7);
-                for _ in 0..cfg.epochs {
-                    let s = self.step(&obs, &actions, &logp_old, None, &r_norm);
-                    accumulate(&mut stats, s, &mut count);
-                }
-            }
-            Preset::Cleanrl | Preset::Team => {
-                let (adv, ret) = gae(
-                    &ro.rewards,
-                    &ro.values,
-                    &ro.dones,
-                    last_values,
-                    cfg.gamma as f32,
-                    cfg.gae_lambda as f32,
-                );
-                let adv = Tensor::from_slice(&adv);
-                let ret = Tensor::from_slice(&ret);
-                let mb = n.div_ceil(cfg.minibatches.max(1));
-                let mut order: Vec<i64> = (0..n as i64).collect();
-                for _ in 0..cfg.epochs {
-                    shuffle(&mut order, rng);
-                    for chunk in order.chunks(mb) {
-                        let idx = Tensor::from_slice(chunk);
-                        let a = adv.index_select(0, &idx);
-                        let a = (&a - a.mean(Kind::Float)) / (a.std(true) + 1e-8);
-                        let s = self.step(
-                            &obs.index_select(0, &idx),
-                            &actions.index_select(0, &idx),
-                            &logp_old.index_select(0, &idx),
-                            Some(&a),
-                            &ret.index_select(0, &idx),
-                        );
-                        accumulate(&mut stats, s, &mut count);
-                    }
-                }
-            }
-        }
-        if count > 0.0 {
-            stats.policy_loss /= count;
-            stats.value_loss /= count;
-            stats.entropy /= count;
-        }
-        stats
-    }
-
-    /// One gradient step. Without `adv`, the advantage is `target - V(s)`
-    /// with the critic's current values (the paper's `A = R_norm - V`).
-    fn step(
-        &mut self,
-        obs: &Tensor,
-        actions: &Tensor,
-        logp_old: &Tensor,
-        adv: Option<&Tensor>,
-        target: &Tensor,
-    ) -> UpdateStats {
-        let logits = self.net.logits(obs);
-        let logp_all = logits.log_softmax(-1, Kind::Float);
-        let logp = logp_all
-            .gather(1, &actions.unsqueeze(1), false)
-            .squeeze_dim(1);
-        let entropy = -(logp_all.exp() * &logp_all)
-            .sum_dim_intlist(-1, false, Kind::Float)
-            .mean(Kind::Float);
-        let v = self.net.value(obs);
-        let adv = match adv {
-            Some(a) => a.shallow_clone(),
-            None => target - v.detach(),
-        };
-        let pl = clipped_surrogate_loss(&logp, logp_old, &adv, self.cfg.clip);
-        let vl = (&v - target).square().mean(Kind::Float);
-        let loss = &pl + self.cfg.value_coef * &vl - self.cfg.entropy_coef * &entropy;
-        self.opt.zero_grad();
-        loss.backward();
-        if let Some(m) = self.cfg.max_grad_norm {
-            self.opt.clip_grad_norm(m);
-        }
-        self.opt.step();
-        UpdateStats {
-            policy_loss: f64::try_from(&pl).unwrap_or(f64::NAN),
-            value_loss: f64::try_from(&vl).unwrap_or(f64::NAN),
-            entropy: f64::try_from(&entropy).unwrap_or(f64::NAN),
-            ..UpdateStats::default()
-        }
-    }
 }
 
-fn accumulate(total: &mut UpdateStats, s: UpdateStats, count: &mut f64) {
+pub(crate) fn accumulate(total: &mut UpdateStats, s: UpdateStats, count: &mut f64) {
     total.policy_loss += s.policy_loss;
     total.value_loss += s.value_loss;
     total.entropy += s.entropy;
     total.approx_kl += s.approx_kl;
     *count += 1.0;
-}
-
-/// Running mean and variance (Chan et al.'s parallel update), for value
-/// normalisation.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RunningNorm {
-    pub mean: f64,
-    pub var: f64,
-    pub count: f64,
-}
-
-impl Default for RunningNorm {
-    fn default() -> RunningNorm {
-        RunningNorm {
-            mean: 0.0,
-            var: 1.0,
-            count: 1e-4,
-        }
-    }
-}
-
-impl RunningNorm {
-    pub fn update(&mut self, xs: &[f32]) {
-        if xs.is_empty() {
-            return;
-        }
-        let n = xs.len() as f64;
-        let mean = xs.iter().map(|&x| f64::from(x)).sum::<f64>() / n;
-        let var = xs
-            .iter()
-            .map(|&x| (f64::from(x) - mean).powi(2))
-            .sum::<f64>()
-            / n;
-        let total = self.count + n;
-        let delta = mean - self.mean;
-        let m2 = self.var * self.count + var * n + delta * delta * self.count * n / total;
-        self.mean += delta * n / total;
-        self.var = m2 / total;
-        self.count = total;
-    }
-
-    fn std(&self) -> f64 {
-        self.var.max(1e-8).sqrt()
-    }
-
-    pub fn normalise(&self, x: f32) -> f32 {
-        ((f64::from(x) - self.mean) / self.std()) as f32
-    }
-
-    pub fn denormalise(&self, y: f32) -> f32 {
-        (f64::from(y) * self.std() + self.mean) as f32
-    }
 }
 
 /// Decision-level transitions: each spans the `dt` ticks from one decision
@@ -833,7 +403,47 @@ pub struct Transitions {
     pub next: Vec<Option<usize>>,
 }
 
+/// What PPO keeps of a decision until it closes: the action's
+/// log-probability and the critic's value where it was taken.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Act {
+    pub logp: f32,
+    pub value: f32,
+}
+
 impl Transitions {
+    /// Stores a closed decision with the value after it (`next_value`) and
+    /// whether its episode ended there. `link` holds each robot's last
+    /// transition while its stream goes on (it ended in the next decision):
+    /// this one becomes that one's successor.
+    pub fn push(
+        &mut self,
+        c: &Closed<'_, Act>,
+        next_value: f32,
+        done: bool,
+        link: &mut [Option<usize>],
+    ) {
+        let i = self.len();
+        self.obs.extend_from_slice(c.obs);
+        self.critic_obs.extend_from_slice(c.critic_obs);
+        self.actions.push(c.action as i64);
+        self.logp.push(c.payload.logp);
+        self.shoot_ok.push(c.shoot_ok);
+        self.banned.push(c.banned);
+        self.values.push(c.payload.value);
+        self.rewards.push(c.reward);
+        self.dt.push(c.ticks.max(1));
+        self.next_values.push(next_value);
+        self.dones.push(done);
+        self.next.push(None);
+        if let Some(j) = link[c.row].take() {
+            self.next[j] = Some(i);
+        }
+        if matches!(c.end, End::Decided { .. }) {
+            link[c.row] = Some(i);
+        }
+    }
+
     pub fn len(&self) -> usize {
         self.actions.len()
     }
@@ -880,7 +490,7 @@ impl Transitions {
 }
 
 /// Fisher-Yates with our own RNG, so minibatches repeat with the seed.
-fn shuffle(v: &mut [i64], rng: &mut ChaCha8Rng) {
+pub(crate) fn shuffle(v: &mut [i64], rng: &mut ChaCha8Rng) {
     for i in (1..v.len()).rev() {
         let j = rng.random_range(0..=i);
         v.swap(i, j);
@@ -890,6 +500,8 @@ fn shuffle(v: &mut [i64], rng: &mut ChaCha8Rng) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::obs::OBS_DIM;
+    use crate::ppo_paper::gae;
     use rand::SeedableRng;
 
     fn vals(t: &Tensor) -> Vec<f32> {
@@ -932,29 +544,6 @@ mod tests {
         loss.backward();
         // d(-ratio)/dlogp = -ratio inside the clip range.
         assert!((vals(&logp.grad())[0] + 0.1f32.exp()).abs() < 1e-5);
-    }
-
-    #[test]
-    fn returns_are_discounted_backwards_and_restart_at_episode_ends() {
-        // Two streams, three steps, time-major; stream 0's episode ends at t = 1.
-        let rewards = [1.0, 0.0, 1.0, 0.0, 1.0, 1.0];
-        let dones = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0];
-        let r = discounted_returns(&rewards, &dones, 2, 0.5);
-        // Stream 0: 1 + 0.5 * 1, then 1 (its episode ends), 1; stream 1: 0.25, 0.5, 1.
-        assert_eq!(r, vec![1.5, 0.25, 1.0, 0.5, 1.0, 1.0]);
-    }
-
-    #[test]
-    fn gae_with_lambda_one_is_the_bootstrapped_return_minus_value() {
-        let rewards = [1.0, 1.0];
-        let values = [0.5, 0.25];
-        let (adv, ret) = gae(&rewards, &values, &[0.0, 0.0], &[2.0], 0.5, 1.0);
-        // R_1 = 1 + 0.5 * 2 = 2; R_0 = 1 + 0.5 * 2 = 2.
-        assert_eq!(ret, vec![2.0, 2.0]);
-        assert_eq!(adv, vec![1.5, 1.75]);
-        // lambda = 0: one-step TD errors.
-        let (adv, _) = gae(&rewards, &values, &[0.0, 1.0], &[2.0], 0.5, 0.0);
-        assert_eq!(adv, vec![1.0 + 0.5 * 0.25 - 0.5, 1.0 - 0.25]);
     }
 
     #[test]

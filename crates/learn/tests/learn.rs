@@ -344,7 +344,7 @@ fn dqn_team_preset_trains_repeatably_and_plays_its_decision_mdp() {
     tch::set_num_threads(1);
     let mut cfg = tiny_config(Algo::Dqn, 5);
     cfg.learners = vec![0, 1, 2, 3];
-    cfg.dqn = naosoccer_learn::dqn::DqnConfig::team();
+    cfg.dqn = naosoccer_learn::config::DqnConfig::team();
     let (dir, a) = short_run(cfg.clone(), "dqn_team_a");
     let (_, b) = short_run(cfg.clone(), "dqn_team_b");
     assert_eq!(a, b, "same seed, same metrics");
@@ -365,7 +365,7 @@ fn dqn_team_preset_learns_the_tiny_task_and_beats_random() {
     let _torch = torch_lock();
     tch::set_num_threads(1);
     let mut cfg = tiny_config(Algo::Dqn, 1);
-    cfg.dqn = naosoccer_learn::dqn::DqnConfig::team();
+    cfg.dqn = naosoccer_learn::config::DqnConfig::team();
     cfg.steps = 40_000;
     cfg.dqn.warmup = 500;
     cfg.dqn.epsilon_decay = 20_000;
@@ -394,7 +394,7 @@ fn issue_13_refreshed_self_play_snapshots_sample_like_the_learner() {
     tch::set_num_threads(1);
     tch::manual_seed(13);
     let mut cfg = tiny_config(Algo::Ppo, 13);
-    cfg.ppo = naosoccer_learn::ppo::PpoConfig::team();
+    cfg.ppo = naosoccer_learn::config::PpoConfig::team();
     cfg.opponent = OpponentSpec::SelfPlay { every: 256 };
     let live = Ppo::new(cfg.ppo.clone(), &run_scale(&cfg), cfg.learners.len()).unwrap();
     let first = self_play_snapshot(&cfg, None).unwrap();
@@ -412,7 +412,7 @@ fn issue_13_refreshed_self_play_snapshots_sample_like_the_learner() {
     );
     let rows = probe_rows();
     // Rows are OBS_DIM wide; the network reads its layout's prefix.
-    let x = naosoccer_learn::ppo::rows_tensor(&rows, 16, OBS_DIM, run_scale(&cfg).dim());
+    let x = naosoccer_learn::nets::rows_tensor(&rows, 16, OBS_DIM, run_scale(&cfg).dim());
     let mut want = vec![0.0f32; 16 * 5];
     live.net.logits(&x).copy_data(&mut want, 16 * 5);
     // The snapshot plays through the torch-free forward pass: the live
@@ -579,7 +579,8 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
 #[test]
 fn team_policies_decide_alike_however_they_are_asked() {
     use naosoccer_client::Policy;
-    use naosoccer_learn::ppo::{PpoConfig, SHOOT};
+    use naosoccer_learn::config::PpoConfig;
+    use naosoccer_learn::ppo::SHOOT;
     use naosoccer_learn::ActMode;
     use naosoccer_proto::Team;
     use naosoccer_referee::Match;
@@ -686,7 +687,7 @@ fn resume_matches_an_uninterrupted_run(
     drills: Option<naosoccer_learn::env::PassDrills>,
     name: &str,
 ) {
-    use naosoccer_learn::ppo::PpoConfig;
+    use naosoccer_learn::config::PpoConfig;
     use naosoccer_learn::schedule::Schedule;
 
     let _torch = torch_lock();
@@ -804,8 +805,8 @@ fn drill_success(cfg: &TrainConfig, spec: &str, seed: u64, episodes: usize) -> f
 /// may differ between processors): too thin a margin.
 #[test]
 fn team_ppo_learns_to_score_on_an_empty_goal() {
+    use naosoccer_learn::config::PpoConfig;
     use naosoccer_learn::env::Drill;
-    use naosoccer_learn::ppo::PpoConfig;
 
     let _torch = torch_lock();
     tch::set_num_threads(1);
@@ -852,7 +853,7 @@ fn epsilon_greedy_never_draws_a_masked_shoot() {
     let _torch = torch_lock();
     tch::set_num_threads(1);
     let mut cfg = tiny_config(Algo::Dqn, 7);
-    cfg.dqn = naosoccer_learn::dqn::DqnConfig::team();
+    cfg.dqn = naosoccer_learn::config::DqnConfig::team();
     let mut p = naosoccer_learn::policy::untrained(&cfg, "eps".into()).unwrap();
     p.set_mode(ActMode::EpsilonGreedy { epsilon: 1.0 });
     let n = 500;
@@ -934,9 +935,10 @@ fn recorded_observations(matches: u64) -> Vec<naosoccer_proto::Observation> {
 /// the whole set as one batch and again four rows (a team) at a time.
 #[test]
 fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
-    use naosoccer_learn::dqn::QNet;
+    use naosoccer_learn::nets::QNet;
+    use naosoccer_learn::nets::{rows_tensor, ActorCritic};
     use naosoccer_learn::policy::sample_uniform;
-    use naosoccer_learn::ppo::{rows_tensor, ActorCritic, SHOOT};
+    use naosoccer_learn::ppo::SHOOT;
     use naosoccer_policy::actions::{argmax, sample};
     use tch::{Kind, Tensor};
 
@@ -1182,8 +1184,8 @@ fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
 
 /// The team preset's actor widened action by action: five actions, then
 /// with `pass`, `support` and `approach` (6, 7 and 8 actions).
-fn widening_configs() -> [naosoccer_learn::ppo::PpoConfig; 4] {
-    use naosoccer_learn::ppo::{PpoConfig, Preset};
+fn widening_configs() -> [naosoccer_learn::config::PpoConfig; 4] {
+    use naosoccer_learn::config::{PpoConfig, Preset};
     let five = PpoConfig::preset(Preset::Team);
     let mut six = five.clone();
     six.decision.as_mut().unwrap().pass = true;
@@ -1221,7 +1223,7 @@ fn actor_logits(p: &naosoccer_learn::ppo::Ppo, rows: &[f32], n: usize) -> Vec<f3
 #[test]
 fn init_from_widens_the_actor_for_the_pass_action() {
     use naosoccer_learn::ppo::{Ppo, PASS, SHOOT};
-    use naosoccer_learn::train::{init_weights, SUPPORT_INIT_BIAS};
+    use naosoccer_learn::warm_start::{init_weights, SUPPORT_INIT_BIAS};
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
     let [five, six, ..] = widening_configs();
@@ -1304,8 +1306,9 @@ fn init_from_widens_the_actor_for_the_pass_action() {
 /// `forward`); a wider source is refused.
 #[test]
 fn init_from_widens_the_actor_for_the_support_action() {
-    use naosoccer_learn::ppo::{Ppo, PpoConfig, Preset, PASS, SHOOT};
-    use naosoccer_learn::train::{init_weights, SUPPORT_INIT_BIAS};
+    use naosoccer_learn::config::{PpoConfig, Preset};
+    use naosoccer_learn::ppo::{Ppo, PASS, SHOOT};
+    use naosoccer_learn::warm_start::{init_weights, SUPPORT_INIT_BIAS};
     use naosoccer_policy::SUPPORT;
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
@@ -1368,7 +1371,7 @@ fn init_from_widens_the_actor_for_the_support_action() {
 #[test]
 fn init_from_widens_the_actor_for_the_approach_action() {
     use naosoccer_learn::ppo::Ppo;
-    use naosoccer_learn::train::init_weights;
+    use naosoccer_learn::warm_start::init_weights;
     use naosoccer_policy::{APPROACH, SUPPORT};
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
@@ -1408,7 +1411,7 @@ fn init_from_widens_the_actor_for_the_approach_action() {
 /// `support`, `approach_only` without `approach`, roles without `support`.
 #[test]
 fn decision_settings_without_their_prerequisites_are_refused() {
-    use naosoccer_learn::ppo::{PpoConfig, Preset};
+    use naosoccer_learn::config::{PpoConfig, Preset};
     use naosoccer_policy::SupportSpot;
     let _torch = torch_lock();
     let dir = out_dir("decision_refused");
