@@ -111,13 +111,15 @@ pub struct ScriptedParams {
     pub mark_gap: f32,
     /// See `markers` (m).
     pub mark_range: f32,
-    /// Defending set plays: when 1, at the other team's kick-off or set play
-    /// the field players leave the ball: the one nearest it stands on the
-    /// line from the ball to the own goal, `keep_out` from the ball, and the
-    /// others in the lanes from the ball to the two opponents most likely
-    /// to receive (nearest the ball after the taker), `keep_out` from the
-    /// ball or goal-side of the receiver when it is closer. 0: off (they go
-    /// for the ball and wait at the edge of the circle).
+    /// Defending set plays: how many field players (0 to 3, nearest the
+    /// ball first) guard at the other team's kick-off or set play instead
+    /// of going for the ball: the nearest stands on the line from the ball
+    /// to the own goal, `keep_out` from the ball; the second and third in
+    /// the lanes from the ball to the two opponents most likely to receive
+    /// (nearest the ball after the taker), `keep_out` from the ball or
+    /// goal-side of the receiver when it is closer. The others play as
+    /// usual (they go for the ball and wait at the edge of the circle).
+    /// 0: off.
     pub set_play_guard: f32,
     /// See `set_play_guard`: just outside the referee's keep-out distance
     /// (`set_play_distance`, 0.6 m by default), which the observation does
@@ -131,6 +133,20 @@ pub struct ScriptedParams {
     pub set_play_pass: f32,
     /// See `set_play_pass` (s).
     pub set_play_wait: f32,
+    /// Shooting on sight: above 0, a player with the ball in reach also
+    /// shoots when the line of its heading from the ball crosses the goal
+    /// line between the posts, `shot_margin` inside them, and the ball is at
+    /// most this far from the opponent goal centre (m), whatever the
+    /// ball-to-goal alignment. 0: off (only the paper's shot conditions).
+    pub shot_line: f32,
+    /// See `shot_line` (m).
+    pub shot_margin: f32,
+    /// Clearing: a player at the ball whose heading is within 0.5 rad of
+    /// the opponent goal's direction (0.9 rad for the keeper) kicks it on
+    /// while the ball is behind this x (m, own goal at -x), instead of
+    /// dribbling. -0.5: the scripted team's own half clearance; the half
+    /// length: kick it long everywhere.
+    pub clear_x: f32,
 }
 
 /// The ladder of built-in teams, weakest first: level `n` is
@@ -183,6 +199,9 @@ impl Default for ScriptedParams {
             keep_out: 0.7,
             set_play_pass: 0.0,
             set_play_wait: 8.0,
+            shot_line: 0.0,
+            shot_margin: 0.3,
+            clear_x: -0.5,
         }
     }
 }
@@ -325,6 +344,8 @@ impl ScriptedParams {
             ("mark_range", self.mark_range),
             ("keep_out", self.keep_out),
             ("set_play_wait", self.set_play_wait),
+            ("shot_line", self.shot_line),
+            ("shot_margin", self.shot_margin),
         ];
         for (k, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -335,6 +356,12 @@ impl ScriptedParams {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{k} must be a number >= 0, got {v}"));
             }
+        }
+        if !self.clear_x.is_finite() {
+            return Err(format!(
+                "clear_x must be a finite number, got {}",
+                self.clear_x
+            ));
         }
         if !self.cover_max_x.is_finite() {
             return Err(format!(
@@ -359,7 +386,7 @@ impl ScriptedParams {
         }
         for (k, v, max) in [
             ("markers", self.markers, 2.0),
-            ("set_play_guard", self.set_play_guard, 1.0),
+            ("set_play_guard", self.set_play_guard, 3.0),
             ("set_play_pass", self.set_play_pass, 1.0),
             ("hold_turns", self.hold_turns, 1.0),
             ("aimed_pass", self.aimed_pass, 1.0),
@@ -445,6 +472,7 @@ impl Scripted {
         if self.p.set_play_guard > 0.0
             && obs.player.index() != 0
             && obs.set_play.is_some_and(|sp| !sp.own)
+            && (guard_rank(obs) as f32) < self.p.set_play_guard
         {
             return self.guard_set_play(obs);
         }
@@ -546,11 +574,11 @@ impl Scripted {
             if in_reach {
                 let distance_ok =
                     ball[0] > p.half_length - p.shoot_range && ball[1].abs() < p.goal_half_width;
+                let shot =
+                    (distance_ok && dtheta_target.abs() < p.b_shoot) || self.on_target(me, ball);
                 if let Some(sp) = obs.set_play.filter(|sp| sp.own && p.set_play_pass > 0.0) {
                     // A kick-off goal counts only after another robot's touch.
-                    let direct = sp.kind != SetPlayKind::KickOff
-                        && distance_ok
-                        && dtheta_target.abs() < p.b_shoot;
+                    let direct = sp.kind != SetPlayKind::KickOff && shot;
                     if !direct {
                         if pass_receiver(obs).is_some() {
                             return Action::Pass;
@@ -560,7 +588,7 @@ impl Scripted {
                         }
                     }
                 }
-                if distance_ok && dtheta_target.abs() < p.b_shoot {
+                if shot {
                     return Action::Shoot;
                 }
                 if p.aimed_pass > 0.0 {
@@ -582,7 +610,7 @@ impl Scripted {
                 }
                 // Clear the ball out of the own half, roughly forwards.
                 let clear_cone = if keeper { 0.9 } else { 0.5 };
-                if ball[0] < -0.5 && wrap(me.heading).abs() < clear_cone {
+                if ball[0] < p.clear_x && wrap(me.heading).abs() < clear_cone {
                     return Action::Shoot;
                 }
             }
@@ -607,6 +635,22 @@ impl Scripted {
             sub(ball, scale(u, p.behind))
         };
         self.go_to(me, target)
+    }
+
+    /// Whether a kick along the heading from `ball` goes in (`shot_line`):
+    /// the ball within `shot_line` of the opponent goal centre and the
+    /// heading's line crossing the goal line `shot_margin` inside the posts.
+    fn on_target(&self, me: &RobotObs, ball: [f32; 2]) -> bool {
+        let p = &self.p;
+        if p.shot_line <= 0.0 || dist(ball, [p.half_length, 0.0]) > p.shot_line {
+            return false;
+        }
+        let (s, c) = me.heading.sin_cos();
+        if c <= 0.05 {
+            return false;
+        }
+        let y = ball[1] + (p.half_length - ball[0]) / c * s;
+        y.abs() < p.goal_half_width - p.shot_margin
     }
 
     /// Where shots aim across the goal mouth: the centre, or `aim_offset`
@@ -669,11 +713,7 @@ impl Scripted {
             v.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             v.into_iter().map(|(_, i)| i).collect::<Vec<_>>()
         };
-        let mates = by_ball(&obs.own, &|i| i == 0);
-        let rank = mates
-            .iter()
-            .position(|&i| i == obs.player.index())
-            .unwrap_or(0);
+        let rank = guard_rank(obs);
         let spot = if rank == 0 {
             let to = sub(goal, ball);
             add(ball, scale(to, p.keep_out / norm(to).max(1e-6)))
@@ -814,6 +854,21 @@ impl Policy for Scripted {
     fn name(&self) -> &str {
         "scripted"
     }
+}
+
+/// A field player's rank by distance to the ball among its standing
+/// teammates other than the keeper (0: the nearest; lower number on a tie),
+/// as the guards of the other team's set play are chosen.
+fn guard_rank(obs: &Observation) -> usize {
+    let ball = [obs.ball.x, obs.ball.y];
+    let mut v: Vec<(f32, usize)> = (1..PLAYERS_PER_TEAM)
+        .filter(|&i| !obs.own[i].fallen)
+        .map(|i| (dist([obs.own[i].x, obs.own[i].y], ball), i))
+        .collect();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    v.iter()
+        .position(|&(_, i)| i == obs.player.index())
+        .unwrap_or(0)
 }
 
 /// The field player (1..=3) that goes for the ball: the one in control, else
@@ -1190,6 +1245,38 @@ mod tests {
             Scripted::new(p).act(&o),
             Scripted::new(ScriptedParams::default()).act(&o)
         );
+    }
+
+    /// `set_play_guard` counts the guards, nearest the ball first: with 1
+    /// only the nearest field player leaves the ball alone; with 3 the
+    /// others guard the lanes too.
+    #[test]
+    fn the_set_play_guard_counts_its_guards() {
+        use naosoccer_proto::{SetPlayKind, SetPlayObs};
+        // A kick-in at (1, 2.2) for the other team; player 2 is the
+        // second-nearest field player, 1.2 m from the ball, facing it.
+        let ball = [1.0f32, 2.2];
+        let mut o = obs(2, robot(0.0, 1.5, 0.6), ball);
+        o.own[1] = robot(1.0, 1.4, std::f32::consts::FRAC_PI_2);
+        o.own[3] = robot(-1.5, -1.0, 0.0);
+        o.opponents[1] = robot(1.0, 2.4, 0.0);
+        o.opponents[2] = robot(0.2, 2.0, 0.0);
+        o.set_play = Some(SetPlayKind::KickIn).map(|kind| SetPlayObs {
+            kind,
+            own: false,
+            ticks_left: 100,
+        });
+        assert_eq!(guard_rank(&o), 1);
+        let guard = |n: &str| ScriptedParams::parse_spec(&format!("set_play_guard={n}")).unwrap();
+        let plain = Scripted::new(ScriptedParams::default()).act(&o);
+        // One guard: the second-nearest plays as the plain team.
+        assert_eq!(Scripted::new(guard("1")).act(&o), plain);
+        // Three: it goes to the lane toward the likeliest receiver instead.
+        let mut three = Scripted::new(guard("3"));
+        let want = three.guard_set_play(&o);
+        assert_eq!(Scripted::new(guard("3")).act(&o), want);
+        assert_ne!(want, plain, "the guard and the plain team must differ here");
+        assert!(ScriptedParams::parse_spec("set_play_guard=4").is_err());
     }
 
     #[test]
