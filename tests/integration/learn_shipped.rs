@@ -8,6 +8,10 @@ use std::process::Command;
 
 use serde_json::Value;
 
+/// Matches of each documented evaluation replayed by default (all of them
+/// with `NAOSOCCER_FULL=1`, as `scripts/test --full` sets it).
+const SAMPLE: u64 = 12;
+
 fn policies() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/policies");
     let mut dirs: Vec<PathBuf> = std::fs::read_dir(&root)
@@ -73,8 +77,14 @@ fn every_shipped_policy_loads_and_plays() {
 /// evaluations were made through tch; the plain-Rust forward pass agrees
 /// with it closely enough that no draw and no greedy choice changes
 /// (issue 14), and it does not depend on the CPU or the batch.
+///
+/// By default the first [`SAMPLE`] matches of each evaluation are played
+/// (a block, as `eval --first-match` plays it) and each must equal its
+/// documented match; with `NAOSOCCER_FULL=1` (`scripts/test --full`) every
+/// match is, and so are the reports' means and tallies.
 #[test]
 fn shipped_policies_reproduce_their_documented_evaluation() {
+    let full = std::env::var("NAOSOCCER_FULL").is_ok_and(|v| v == "1");
     for d in policies().iter().filter(|d| {
         [
             "ppo-paper-seed1",
@@ -87,7 +97,9 @@ fn shipped_policies_reproduce_their_documented_evaluation() {
     }) {
         let doc: Value =
             serde_json::from_str(&std::fs::read_to_string(d.join("eval.json")).unwrap()).unwrap();
-        let matches = doc["matches"].as_u64().unwrap().to_string();
+        let all = doc["matches"].as_u64().unwrap();
+        let played = if full { all } else { all.min(SAMPLE) };
+        let matches = played.to_string();
         let seed = doc["seed"].as_u64().unwrap().to_string();
         let minutes = doc["minutes"].as_f64().unwrap().to_string();
         let red = doc["red"]["name"].as_str().unwrap();
@@ -113,14 +125,22 @@ fn shipped_policies_reproduce_their_documented_evaluation() {
             args.push("--both-sides");
         }
         let got = eval(&args);
-        let differ: Vec<usize> = (0..doc["scores"].as_array().unwrap().len())
-            .filter(|&i| got["scores"][i] != doc["scores"][i])
+        let differ: Vec<usize> = (0..played as usize)
+            .filter(|&i| {
+                got["scores"][i] != doc["scores"][i]
+                    || ["control_rate_percent", "passes", "shots", "state_hash"]
+                        .iter()
+                        .any(|k| got["results"][i][k] != doc["results"][i][k])
+            })
             .collect();
         assert!(
             differ.is_empty(),
             "{}: matches {differ:?} differ from the documented evaluation",
             d.display()
         );
+        if !full {
+            continue;
+        }
         for team in ["blue", "red"] {
             for figure in ["goals", "control_rate_percent", "passes", "shots"] {
                 assert_eq!(
