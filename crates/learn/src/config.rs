@@ -293,18 +293,7 @@ impl PpoConfig {
             lr_end_fraction: Some(0.1),
             entropy_coef_end: Some(0.002),
             central_critic: false,
-            decision: Some(DecisionConfig {
-                persist: 3,
-                mask_shoot: true,
-                pass: false,
-                support: false,
-                support_hold: 0,
-                chasers: 0,
-                support_only: false,
-                support_spot: Default::default(),
-                approach: false,
-                approach_only: false,
-            }),
+            decision: Some(DecisionConfig::team()),
         }
     }
 
@@ -461,18 +450,7 @@ impl DqnConfig {
             n_step: 3,
             huber: true,
             max_grad_norm: 10.0,
-            decision: Some(DecisionConfig {
-                persist: 3,
-                mask_shoot: true,
-                pass: false,
-                support: false,
-                support_hold: 0,
-                chasers: 0,
-                support_only: false,
-                support_spot: Default::default(),
-                approach: false,
-                approach_only: false,
-            }),
+            decision: Some(DecisionConfig::team()),
         }
     }
 

@@ -457,18 +457,7 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
         o.own[1].fallen = fallen;
         o
     };
-    let d = DecisionConfig {
-        persist: 3,
-        mask_shoot: true,
-        pass: false,
-        support: false,
-        support_hold: 0,
-        chasers: 0,
-        support_only: false,
-        support_spot: Default::default(),
-        approach: false,
-        approach_only: false,
-    };
+    let d = DecisionConfig::team();
     let half = [4.5, 3.0];
     let mut h = Hold::default();
     assert!(h.must_decide(&at(0, false, false)));
@@ -521,16 +510,10 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
     let spot = support_spot(&at(0, -2.0, (0.0, 0.0)), half, Default::default());
     assert_eq!(spot, [1.5, 1.0]);
     let mut d = DecisionConfig {
-        persist: 3,
-        mask_shoot: true,
         pass: true,
         support: true,
         support_hold: 30,
-        chasers: 0,
-        support_only: false,
-        support_spot: Default::default(),
-        approach: false,
-        approach_only: false,
+        ..DecisionConfig::team()
     };
     let mut h = Hold::default();
     assert!(h.must_decide(&at(0, -2.0, (0.0, 0.0))));

@@ -190,6 +190,25 @@ impl SupportSpot {
 }
 
 impl DecisionConfig {
+    /// The `team` presets' decisions: a movement holds 3 ticks, `shoot` is
+    /// masked while the ball is out of reach, the five protocol actions of
+    /// the paper and nothing more (each extra is switched on by a `train`
+    /// flag).
+    pub fn team() -> DecisionConfig {
+        DecisionConfig {
+            persist: 3,
+            mask_shoot: true,
+            pass: false,
+            support: false,
+            support_hold: 0,
+            chasers: 0,
+            support_only: false,
+            support_spot: SupportSpot::Ahead,
+            approach: false,
+            approach_only: false,
+        }
+    }
+
     /// How many actions the networks choose among: 5, 6 with `pass`, 7
     /// with `pass` and `support`, 8 with `approach` too.
     pub fn actions(&self) -> usize {

@@ -189,16 +189,11 @@ fn approach_masks() {
     let chaser = m.observe(Team::Blue, 1);
     let other = m.observe(Team::Blue, 2);
     let mut d = DecisionConfig {
-        persist: 3,
-        mask_shoot: true,
         pass: true,
         support: true,
-        support_hold: 0,
         chasers: 1,
-        support_only: false,
-        support_spot: SupportSpot::Ahead,
         approach: true,
-        approach_only: false,
+        ..DecisionConfig::team()
     };
     assert_eq!(d.actions(), APPROACH + 1);
     let pass_bit = |o| {
