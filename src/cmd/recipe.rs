@@ -312,15 +312,20 @@ pub fn run(dir: &Path) -> anyhow::Result<()> {
             times.stages[i].done = true;
             continue;
         }
-        let resumable = has_checkpoint(&sdir)
-            && std::fs::read_to_string(sdir.join("config.json"))
-                .is_ok_and(|c| c.contains("\"decision\"") && !c.contains("\"decision\": null"));
+        let resumable = has_checkpoint(&sdir) && continues_from_checkpoint(&sdir);
         let argv = if resumable {
             eprintln!(
                 "stage {}/{n} {name}: continuing from its latest checkpoint",
                 i + 1
             );
             vec!["--resume".to_string(), sdir.display().to_string()]
+        } else if has_checkpoint(&sdir) {
+            eprintln!(
+                "stage {}/{n} {name}: starting over (only decision-level PPO stages continue \
+                 from a checkpoint)",
+                i + 1
+            );
+            recipe.stage_argv(i, dir, info.seed)
         } else {
             eprintln!("stage {}/{n} {name}: starting", i + 1);
             recipe.stage_argv(i, dir, info.seed)
@@ -361,6 +366,19 @@ pub fn run(dir: &Path) -> anyhow::Result<()> {
         dir.display()
     );
     Ok(())
+}
+
+/// Whether the stage run in `dir` is one `train --resume` continues: its
+/// config.json says decision-level PPO (`algo` "ppo" with a `ppo.decision`
+/// table). Other sections of the file, such as `dqn.decision`, may be null.
+fn continues_from_checkpoint(dir: &Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(dir.join("config.json")) else {
+        return false;
+    };
+    let Ok(cfg) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return false;
+    };
+    cfg["algo"] == "ppo" && cfg["ppo"]["decision"].is_object()
 }
 
 fn has_checkpoint(dir: &Path) -> bool {

@@ -725,7 +725,7 @@ matches = 4
 rollout = 32
 epochs = 2
 lr = 0.0001
-checkpoint-every = 1024
+checkpoint-every = 512
 "#,
     )
     .unwrap();
@@ -788,6 +788,59 @@ checkpoint-every = 1024
         std::fs::read(split.join("final.safetensors")).unwrap(),
         final_whole,
         "a recipe continued after a stop writes the same team"
+    );
+
+    // The same run stopped inside its second stage, after its first
+    // checkpoint: it continues from that checkpoint, not from scratch.
+    let mid = dir("recipe_mid");
+    for stage in ["01-first", "02-second"] {
+        std::fs::create_dir_all(mid.join(stage).join("checkpoints")).unwrap();
+    }
+    for f in ["recipe.toml", "recipe-run.json", "time.json"] {
+        std::fs::copy(whole.join(f), mid.join(f)).unwrap();
+    }
+    let copy_files = |from: &std::path::Path, to: &std::path::Path, keep: &dyn Fn(&str) -> bool| {
+        for e in std::fs::read_dir(from).unwrap() {
+            let e = e.unwrap();
+            let name = e.file_name().to_string_lossy().into_owned();
+            if e.file_type().unwrap().is_file() && keep(&name) {
+                std::fs::copy(e.path(), to.join(&name)).unwrap();
+            }
+        }
+    };
+    copy_files(&whole.join("01-first"), &mid.join("01-first"), &|_| true);
+    copy_files(&whole.join("02-second"), &mid.join("02-second"), &|n| {
+        n != "final.safetensors"
+    });
+    let mut steps: Vec<u64> = std::fs::read_dir(whole.join("02-second/checkpoints"))
+        .unwrap()
+        .filter_map(|e| {
+            let name = e.unwrap().file_name().to_string_lossy().into_owned();
+            name.strip_prefix("step-")?
+                .strip_suffix(".resume.json")?
+                .parse()
+                .ok()
+        })
+        .collect();
+    steps.sort_unstable();
+    assert!(steps.len() >= 2, "checkpoints inside the stage: {steps:?}");
+    let first = format!("step-{}.", steps[0]);
+    copy_files(
+        &whole.join("02-second/checkpoints"),
+        &mid.join("02-second/checkpoints"),
+        &|n| n.starts_with(&first),
+    );
+    let out = naosoccer(&["train", "--resume", mid.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", common::text(&out));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("stage 2/2 second: continuing from its latest checkpoint"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(mid.join("final.safetensors")).unwrap(),
+        final_whole,
+        "a recipe continued from a checkpoint inside a stage writes the same team"
     );
 
     let again = naosoccer(&[
