@@ -32,22 +32,19 @@ fn parse_players(s: &str) -> Result<Vec<usize>, String> {
 
 #[derive(Args, Debug)]
 #[command(after_help = "Examples:
-  naosoccer train --algo ppo --steps 2000000 --seed 1 --out runs/ppo-1
-  naosoccer train --algo dqn --steps 2000000 --seed 1 --out runs/dqn-1
+  naosoccer train --recipe assets/recipes/ppo-team.toml --out runs/ppo-team-1 --seed 1
+  naosoccer train --resume runs/ppo-team-1   # go on after a stop, bit for bit
+  naosoccer train --algo ppo --preset team --opponent scripted:2 --steps 5000000 --seed 1 \\
+                  --out runs/ppo-team-small
   naosoccer train --algo dqn --preset team --steps 3000000 --seed 1 --out runs/dqn-team-1
   naosoccer train --algo ppo --preset cleanrl --opponent self-play:200000 --out runs/ppo-sp
-  naosoccer train --algo ppo --preset team --config assets/train-team-lane.toml --obs-version 3 \
-                  --minutes 10 --steps 40000000 --seed 1 --threads 1 --checkpoint-every 1000000 \
-                  --opponent \"schedule:idle@1000000,random@3000000,scripted@8000000,scripted+scripted:assets/scripted/hound.toml+pool=2\" \
-                  --out runs/ppo-team-1      # ppo-team-v3-seed1 (docs/LEARNING.md)
-  naosoccer train --algo ppo --preset team --config assets/train-team-facing.toml --obs-version 3 \
-                  --minutes 10 --steps 10000000 --seed 1 --threads 1 --checkpoint-every 1000000 \
-                  --opponent \"schedule:scripted+scripted:assets/scripted/hound.toml+pool=2\" \
-                  --pass-drills 4 --pass-action --support-action --support-hold 60 --support-roles 2 \
-                  --support-spot facing --init-from runs/ppo-team-1 --pass-init turn_left \
-                  --support-init-bias 0 --lr 0.0001 --entropy-coef 0.006 \
-                  --out runs/ppo-team-1-facing   # then this: the shipped ppo-team-seed1
-  naosoccer train --resume runs/ppo-team-1   # go on after a stop, bit for bit
+  naosoccer train --algo ppo --steps 2000000 --seed 1 --out runs/ppo-1   # the paper's PPO
+
+Every other setting of a run (the team preset's actions and roles, pass
+drills, the observation layout, PPO and DQN hyperparameters, learners and
+teammates: 31 in all) is a recipe field and is also accepted here as an
+option of the same name (--KEY VALUE, --KEY for a switch); docs/RECIPES.md
+lists them in one table.
 
 Presets (--preset, PPO): paper (the paper's Algorithm 2, every robot decides
 every tick), cleanrl (GAE, advantage normalisation, grad-norm clipping,
@@ -103,23 +100,23 @@ pub struct TrainArgs {
     #[arg(long, default_value = "paper")]
     preset: String,
     /// Team presets (PPO and DQN): ticks a movement decision holds.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     persist: Option<u32>,
     /// Team presets: let robots shoot with the ball out of reach.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     no_shoot_mask: bool,
     /// PPO team preset: give the robots a sixth action, `pass` (a kick
     /// toward the teammate the protocol's pass rule names; see
     /// docs/PROTOCOL.md), possible only with the ball in kick reach and a
     /// teammate to receive it.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     pass_action: bool,
     /// PPO team preset, with --pass-action: give the robots a seventh
     /// action, `support`, a walk to the support spot 1.5 m ahead of the
     /// ball and 1 m to its side (where a pass can reach them), facing the
     /// ball once there. The team's policy turns it into `forward`, turns
     /// and `stay` each tick, so it needs nothing new on the wire.
-    #[arg(long, requires = "pass_action")]
+    #[arg(long, hide = true, requires = "pass_action")]
     support_action: bool,
     /// With --support-action: one `support` decision holds up to this many
     /// ticks (10 ticks = 1 s at the default 10 Hz; a robot walks 0.2 m/s),
@@ -127,7 +124,7 @@ pub struct TrainArgs {
     /// it, instead of --persist ticks like any movement. Recorded in the
     /// run's configuration, so the team plays the same way in `match`,
     /// `eval` and over the socket. 0: off.
-    #[arg(long, value_name = "TICKS", requires = "support_action")]
+    #[arg(long, hide = true, value_name = "TICKS", requires = "support_action")]
     support_hold: Option<u32>,
     /// With --support-action: roles. Only the team's CHASERS (1 to 3)
     /// standing robots nearest the ball (on a tie the lower player number
@@ -136,13 +133,13 @@ pub struct TrainArgs {
     /// Read from each robot's own observation and recorded in the run's
     /// configuration, so the team plays the same way in `match`, `eval`
     /// and over the socket.
-    #[arg(long, value_name = "CHASERS", requires = "support_action",
+    #[arg(long, hide = true, value_name = "CHASERS", requires = "support_action",
           value_parser = clap::value_parser!(u32).range(1..=3))]
     support_roles: Option<u32>,
     /// With --support-roles: the robots that do not chase may not `stay`
     /// either, so they always walk to or hold their support spot (where a
     /// pass can reach them) unless the ball is in their reach.
-    #[arg(long, requires = "support_roles")]
+    #[arg(long, hide = true, requires = "support_roles")]
     support_only: bool,
     /// With --support-action: where the support spot is. `ahead` (the
     /// default): 1.5 m ahead of the ball toward the opponent goal and 1 m
@@ -153,7 +150,7 @@ pub struct TrainArgs {
     /// Recorded in the run's configuration. The reward's `support` shaping
     /// keeps its own spot (ahead); set it to 0 in the config when the spots
     /// differ.
-    #[arg(long, value_name = "SPOT", value_parser = ["ahead", "facing"],
+    #[arg(long, hide = true, value_name = "SPOT", value_parser = ["ahead", "facing"],
           requires = "support_action")]
     support_spot: Option<String>,
     /// With --support-action: give the robots an eighth action, `approach`,
@@ -162,11 +159,11 @@ pub struct TrainArgs {
     /// goal (as the scripted team lines up). The team's policy turns it
     /// into `forward` and turns each tick. With --support-roles only the
     /// chasers may `approach`. Recorded in the run's configuration.
-    #[arg(long, requires = "support_action")]
+    #[arg(long, hide = true, requires = "support_action")]
     approach_action: bool,
     /// With --approach-action: no robot may walk `forward` or turn; they
     /// move by `approach` and `support` only (and `stay`, `shoot`, `pass`).
-    #[arg(long, requires = "approach_action")]
+    #[arg(long, hide = true, requires = "approach_action")]
     approach_only: bool,
     /// PPO team preset: start from these weights (a run directory's
     /// final.safetensors, or a .safetensors checkpoint) with a fresh
@@ -182,39 +179,39 @@ pub struct TrainArgs {
     /// `pass`: start `pass` as a copy of this action instead of `shoot`
     /// (forward, turn_left, turn_right, shoot or stay). `turn_left` gives a
     /// kicker that tries `pass` where it used to turn with the ball.
-    #[arg(long, value_name = "ACTION", requires_all = ["init_from", "pass_action"])]
+    #[arg(long, hide = true, value_name = "ACTION", requires_all = ["init_from", "pass_action"])]
     pass_init: Option<naosoccer_proto::Action>,
     /// With --init-from and --support-action, from a team trained without
     /// `support`: start `support`'s bias this many logits below
     /// `forward`'s (its weights are a copy of `forward`'s). 1 (the
     /// default) makes it about 2.7 times less likely than `forward`; 0
     /// starts it as likely.
-    #[arg(long, value_name = "LOGITS", requires_all = ["init_from", "support_action"], allow_negative_numbers = true)]
+    #[arg(long, hide = true, value_name = "LOGITS", requires_all = ["init_from", "support_action"], allow_negative_numbers = true)]
     support_init_bias: Option<f32>,
     /// PPO: the critic reads the whole team's observations (MAPPO).
-    #[arg(long)]
+    #[arg(long, hide = true)]
     central_critic: bool,
     /// PPO: minibatches per pass.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     minibatches: Option<usize>,
     /// PPO: entropy-bonus weight at the start of the run.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     entropy_coef: Option<f64>,
     /// PPO: per-tick discount.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     gamma: Option<f64>,
     /// PPO team preset: the KL early stop's target (0: no early stop).
-    #[arg(long)]
+    #[arg(long, hide = true)]
     target_kl: Option<f64>,
     /// PPO: the learning rate of actor and critic at the start.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     lr: Option<f64>,
     /// Drill episodes instead of matches: the learners alone before the
     /// opponent goal, the ball at a random spot; an episode ends with a goal
     /// or the clock (use a short --minutes). `anywhere`: the robot anywhere
     /// within 0.8 m of the ball, facing anywhere; `behind`: within 45
     /// degrees of straight behind it, facing it +-30 degrees.
-    #[arg(long, value_parser = ["anywhere", "behind"])]
+    #[arg(long, hide = true, value_parser = ["anywhere", "behind"])]
     drill: Option<String>,
     /// PPO team preset: of the --matches played side by side, the last N
     /// play pass drills instead of whole matches: episodes of
@@ -222,22 +219,22 @@ pub struct TrainArgs {
     /// a teammate 1.2-2.5 m ahead in its line, facing the ball, the
     /// opponents of the run's mix at least 1.2 m away; the match then plays
     /// on. A drill's end is bootstrapped, as the match would go on.
-    #[arg(long, value_name = "N")]
+    #[arg(long, hide = true, value_name = "N")]
     pass_drills: Option<usize>,
     /// Length of one pass drill, seconds of game time; it must divide the
     /// match's length.
-    #[arg(long, default_value_t = 30.0, requires = "pass_drills")]
+    #[arg(long, hide = true, default_value_t = 30.0, requires = "pass_drills")]
     pass_drill_seconds: f32,
     /// The pass drill receiver's largest angle off the kicker's heading,
     /// degrees (0-90; default 8.6, 0.15 rad: in its line). Wider, the kicker
     /// must turn with the ball to pass.
-    #[arg(long, value_name = "DEG", requires = "pass_drills")]
+    #[arg(long, hide = true, value_name = "DEG", requires = "pass_drills")]
     pass_drill_angle: Option<f32>,
     /// Observation layout version: 2 (the default), 3 (version 2 plus the
     /// pass picture: teammates seen from the robot, whether they face the
     /// ball, how clear the lane to them is) or 1 (the shipped paper-era
     /// teams' layout; PPO only). docs/LEARNING.md lists each layout.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     obs_version: Option<u32>,
     /// Opponent: scripted, a scripted variant (scripted:KEY=VAL,... or
     /// scripted:FILE.toml), random, idle, a frozen team (ppo:DIR, dqn:DIR),
@@ -252,7 +249,7 @@ pub struct TrainArgs {
     #[arg(long, default_value_t = 2)]
     threads: usize,
     /// libtorch's intra-op threads.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, hide = true, default_value_t = 1)]
     torch_threads: i32,
     /// Match configuration (TOML); default: the built-in assets/match.toml.
     #[arg(long)]
@@ -261,31 +258,31 @@ pub struct TrainArgs {
     #[arg(long)]
     minutes: Option<f32>,
     /// Players the network controls, e.g. 0,1,2,3 (default) or 1.
-    #[arg(long, default_value = "0,1,2,3")]
+    #[arg(long, hide = true, default_value = "0,1,2,3")]
     learners: String,
     /// Built-in policy of own players that do not learn.
-    #[arg(long, default_value = "idle")]
+    #[arg(long, hide = true, default_value = "idle")]
     teammates: String,
     /// Transitions between checkpoints.
     #[arg(long, default_value_t = 250_000)]
     checkpoint_every: u64,
     /// PPO: control ticks each match plays between updates.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     rollout: Option<usize>,
     /// PPO: passes over each rollout.
-    #[arg(long)]
+    #[arg(long, hide = true)]
     epochs: Option<usize>,
     /// DQN: one network shared by the team instead of one per robot (the
     /// paper; the team preset always shares).
-    #[arg(long)]
+    #[arg(long, hide = true)]
     shared: bool,
     /// DQN: transitions summed into one return before bootstrapping (the
     /// paper: 1; the team preset: 3).
-    #[arg(long)]
+    #[arg(long, hide = true)]
     n_step: Option<usize>,
     /// DQN: exploration rate (the paper: 0.3, fixed; the team preset: the
     /// rate its schedule ends at).
-    #[arg(long)]
+    #[arg(long, hide = true)]
     epsilon: Option<f64>,
 }
 
@@ -601,4 +598,49 @@ pub fn bench_learn(a: BenchLearnArgs) -> anyhow::Result<()> {
         if e2e >= 25_000.0 { "met" } else { "NOT met" }
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 41, item 3: `train --help` shows at most 15 options (help
+    /// included); every option, shown or not, is in the guide's table of
+    /// recipe fields.
+    #[test]
+    fn train_help_is_short_and_the_guide_lists_every_option() {
+        let cmd = TrainArgs::augment_args(clap::Command::new("train"));
+        let shown: Vec<String> = cmd
+            .get_arguments()
+            .filter(|a| !a.is_hide_set())
+            .filter_map(|a| a.get_long().map(str::to_string))
+            .collect();
+        assert!(
+            shown.len() < 15,
+            "{} options besides --help: {shown:?}",
+            shown.len()
+        );
+        let guide = include_str!("../../docs/LEARNING.md");
+        let table = guide
+            .split("### Recipe fields: every option of `train`")
+            .nth(1)
+            .and_then(|s| s.split("\n## ").next())
+            .expect("LEARNING.md has the recipe fields section");
+        for long in shown.iter() {
+            assert!(
+                table.contains(&format!("`--{long}`")),
+                "--{long} is named among the options of every day"
+            );
+        }
+        for a in cmd.get_arguments() {
+            let long = a.get_long().unwrap();
+            let named = table.match_indices(&format!("--{long}")).any(|(i, m)| {
+                !table[i + m.len()..].starts_with(|c: char| c.is_ascii_alphanumeric() || c == '-')
+            });
+            assert!(
+                named,
+                "--{long} is missing from LEARNING.md's recipe fields"
+            );
+        }
+    }
 }
