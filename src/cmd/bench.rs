@@ -20,7 +20,7 @@ pub enum BenchCommand {
     /// once (errors and missed ticks counted), and real-time matches at the
     /// configured rate (99th-percentile tick lateness). Build with
     /// `--release` for meaningful figures.
-    Server(super::server::BenchServerArgs),
+    Server(super::bench_server::BenchServerArgs),
     /// PPO training speed end to end, in robot transitions a second.
     ///
     /// Trains PPO against the scripted team (matches side by side, one
@@ -28,7 +28,7 @@ pub enum BenchCommand {
     /// included), then steps the same environment with random actions alone,
     /// and prints both rates. Build with `--release` for meaningful figures.
     #[cfg(feature = "train")]
-    Learn(super::learn::BenchLearnArgs),
+    Learn(super::bench_learn::BenchLearnArgs),
     /// PPO training speed (needs the `train` feature, libtorch: run it for
     /// what to build).
     #[cfg(not(feature = "train"))]
@@ -45,9 +45,9 @@ pub enum BenchCommand {
 pub fn run(b: BenchCommand) -> anyhow::Result<()> {
     match b {
         BenchCommand::Sim(args) => super::play::bench_sim(args),
-        BenchCommand::Server(args) => super::server::bench(args),
+        BenchCommand::Server(args) => super::bench_server::bench(args),
         #[cfg(feature = "train")]
-        BenchCommand::Learn(args) => super::learn::bench_learn(args),
+        BenchCommand::Learn(args) => super::bench_learn::bench_learn(args),
         #[cfg(not(feature = "train"))]
         BenchCommand::Learn(args) => super::not_built::run("bench learn", args),
         BenchCommand::Soak(args) => super::soak::soak(args),

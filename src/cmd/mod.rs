@@ -1,5 +1,8 @@
 //! One module per subcommand (or family of subcommands).
 pub mod bench;
+#[cfg(feature = "train")]
+pub mod bench_learn;
+pub mod bench_server;
 pub mod client;
 pub mod eval;
 pub mod league;
