@@ -147,6 +147,19 @@ pub struct ScriptedParams {
     /// dribbling. -0.5: the scripted team's own half clearance; the half
     /// length: kick it long everywhere.
     pub clear_x: f32,
+    /// Reading the ball: above 0, players go where the rolling ball will
+    /// be rather than where it is. The player going for it walks to the
+    /// ball's place after the time it needs to get there (its distance at
+    /// `walk_speed`), at most `lead` seconds ahead; who goes for it, the
+    /// support places and the keeper's place follow the ball `lead` seconds
+    /// ahead. The ball rolls with its speed decaying as
+    /// exp(-`ball_damping` t) (the match configuration's
+    /// `ball_linear_damping`). 0: off (s).
+    pub lead: f32,
+    /// See `lead` (1/s).
+    pub ball_damping: f32,
+    /// See `lead` (m/s).
+    pub walk_speed: f32,
 }
 
 /// The ladder of built-in teams, weakest first: level `n` is
@@ -202,6 +215,9 @@ impl Default for ScriptedParams {
             shot_line: 0.0,
             shot_margin: 0.3,
             clear_x: -0.5,
+            lead: 0.0,
+            ball_damping: 0.8,
+            walk_speed: 0.2,
         }
     }
 }
@@ -232,14 +248,21 @@ impl ScriptedParams {
     }
 
     /// Level `n` on `pitch`, as [`ScriptedParams::for_pitch`] adapts the
-    /// defaults (a level changes no pitch size).
+    /// defaults (a level changes no pitch size). A level that sets its own
+    /// `b_rad` keeps it, as it does under `eval` and `match`.
     pub fn level_for_pitch(n: u8, pitch: &Pitch) -> Result<ScriptedParams, String> {
         let on_pitch = ScriptedParams::for_pitch(pitch);
+        let level = ScriptedParams::level(n)?;
+        let b_rad = if level.b_rad == ScriptedParams::default().b_rad {
+            on_pitch.b_rad
+        } else {
+            level.b_rad
+        };
         Ok(ScriptedParams {
             half_length: on_pitch.half_length,
             goal_half_width: on_pitch.goal_half_width,
-            b_rad: on_pitch.b_rad,
-            ..ScriptedParams::level(n)?
+            b_rad,
+            ..level
         })
     }
 
@@ -328,6 +351,8 @@ impl ScriptedParams {
             ("pass_cone", self.pass_cone),
             ("turn_start", self.turn_start),
             ("arrive", self.arrive),
+            ("ball_damping", self.ball_damping),
+            ("walk_speed", self.walk_speed),
         ];
         let non_negative = [
             ("reach_min", self.reach_min),
@@ -346,6 +371,7 @@ impl ScriptedParams {
             ("set_play_wait", self.set_play_wait),
             ("shot_line", self.shot_line),
             ("shot_margin", self.shot_margin),
+            ("lead", self.lead),
         ];
         for (k, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -486,11 +512,12 @@ impl Scripted {
     fn keeper(&mut self, obs: &Observation) -> Action {
         let p = &self.p;
         let me = obs.me();
-        let ball = [obs.ball.x, obs.ball.y];
         let own_line = -p.half_length;
-        if ball[0] < own_line + p.keeper_zone && ball[1].abs() < p.goal_half_width + 0.6 {
+        let now = [obs.ball.x, obs.ball.y];
+        if now[0] < own_line + p.keeper_zone && now[1].abs() < p.goal_half_width + 0.6 {
             return self.engage(obs, true);
         }
+        let ball = self.team_ball(obs);
         let home = if p.keeper_guard > 0.0 {
             // On the line from the goal centre to the ball.
             let goal = [own_line, 0.0];
@@ -510,8 +537,8 @@ impl Scripted {
 
     fn field_player(&mut self, obs: &Observation) -> Action {
         let me_idx = obs.player.index();
-        let ball = [obs.ball.x, obs.ball.y];
-        let engager = engager(obs);
+        let ball = self.team_ball(obs);
+        let engager = engager(obs, ball);
         if engager == Some(me_idx) {
             return self.engage(obs, false);
         }
@@ -554,7 +581,10 @@ impl Scripted {
         let p = self.p;
         let me = obs.me();
         let pos = [me.x, me.y];
-        let ball = [obs.ball.x, obs.ball.y];
+        // Where the ball is, for the kick; where it will be when this
+        // player gets there, for the walk (`lead`; the same without it).
+        let now = [obs.ball.x, obs.ball.y];
+        let ball = self.my_ball(obs);
         let goal = [p.half_length, self.aim_y(obs)];
         let to_goal = sub(goal, ball);
         let line = to_goal[1].atan2(to_goal[0]);
@@ -568,14 +598,14 @@ impl Scripted {
         if dtheta_target.abs() < p.align_tolerance
             || (d < 0.25 && dtheta_target.abs() < 2.0 * p.align_tolerance)
         {
-            let (fwd, lat) = local(me, ball);
+            let (fwd, lat) = local(me, now);
             let in_reach =
                 fwd >= p.reach_min && fwd <= p.reach_max && lat.abs() <= p.reach_half_width;
             if in_reach {
                 let distance_ok =
-                    ball[0] > p.half_length - p.shoot_range && ball[1].abs() < p.goal_half_width;
+                    now[0] > p.half_length - p.shoot_range && now[1].abs() < p.goal_half_width;
                 let shot =
-                    (distance_ok && dtheta_target.abs() < p.b_shoot) || self.on_target(me, ball);
+                    (distance_ok && dtheta_target.abs() < p.b_shoot) || self.on_target(me, now);
                 if let Some(sp) = obs.set_play.filter(|sp| sp.own && p.set_play_pass > 0.0) {
                     // A kick-off goal counts only after another robot's touch.
                     let direct = sp.kind != SetPlayKind::KickOff && shot;
@@ -593,7 +623,7 @@ impl Scripted {
                 }
                 if p.aimed_pass > 0.0 {
                     // The protocol's pass: a kick at the receiver's feet.
-                    let ahead = pass_receiver(obs).is_some_and(|j| obs.own[j].x > ball[0] + 0.3);
+                    let ahead = pass_receiver(obs).is_some_and(|j| obs.own[j].x > now[0] + 0.3);
                     if ahead {
                         return Action::Pass;
                     }
@@ -604,13 +634,13 @@ impl Scripted {
                 let contested = obs
                     .opponents
                     .iter()
-                    .any(|o| !o.fallen && dist([o.x, o.y], ball) < p.contest_radius);
+                    .any(|o| !o.fallen && dist([o.x, o.y], now) < p.contest_radius);
                 if contested && wrap(me.heading).abs() < std::f32::consts::FRAC_PI_2 {
                     return Action::Shoot;
                 }
                 // Clear the ball out of the own half, roughly forwards.
                 let clear_cone = if keeper { 0.9 } else { 0.5 };
-                if ball[0] < p.clear_x && wrap(me.heading).abs() < clear_cone {
+                if now[0] < p.clear_x && wrap(me.heading).abs() < clear_cone {
                     return Action::Shoot;
                 }
             }
@@ -635,6 +665,46 @@ impl Scripted {
             sub(ball, scale(u, p.behind))
         };
         self.go_to(me, target)
+    }
+
+    /// Where the ball will be `t` seconds from now if nothing touches it:
+    /// its speed decays as exp(-`ball_damping` t); not past a goal line.
+    fn ball_in(&self, obs: &Observation, t: f32) -> [f32; 2] {
+        let k = self.p.ball_damping;
+        let f = (1.0 - (-k * t).exp()) / k;
+        let hl = self.p.half_length;
+        [
+            (obs.ball.x + obs.ball.vx * f).clamp(-hl, hl),
+            obs.ball.y + obs.ball.vy * f,
+        ]
+    }
+
+    /// The ball as the team reads it (`lead` seconds ahead; where it is
+    /// without `lead`): who goes for it, the support places, the keeper's
+    /// place.
+    fn team_ball(&self, obs: &Observation) -> [f32; 2] {
+        if self.p.lead > 0.0 {
+            self.ball_in(obs, self.p.lead)
+        } else {
+            [obs.ball.x, obs.ball.y]
+        }
+    }
+
+    /// The ball as the player going for it reads it: where it will be when
+    /// the player, walking at `walk_speed`, can be there (at most `lead`
+    /// seconds ahead; a fixed point of three rounds).
+    fn my_ball(&self, obs: &Observation) -> [f32; 2] {
+        let now = [obs.ball.x, obs.ball.y];
+        if self.p.lead <= 0.0 {
+            return now;
+        }
+        let me = obs.me();
+        let mut at = now;
+        for _ in 0..3 {
+            let t = (dist([me.x, me.y], at) / self.p.walk_speed).min(self.p.lead);
+            at = self.ball_in(obs, t);
+        }
+        at
     }
 
     /// Whether a kick along the heading from `ball` goes in (`shot_line`):
@@ -872,12 +942,11 @@ fn guard_rank(obs: &Observation) -> usize {
 }
 
 /// The field player (1..=3) that goes for the ball: the one in control, else
-/// the closest standing one (lower number on a tie).
-fn engager(obs: &Observation) -> Option<usize> {
+/// the closest standing one to `ball` (lower number on a tie).
+fn engager(obs: &Observation, ball: [f32; 2]) -> Option<usize> {
     if let Some(i) = (1..PLAYERS_PER_TEAM).find(|&i| obs.control[i]) {
         return Some(i);
     }
-    let ball = [obs.ball.x, obs.ball.y];
     (1..PLAYERS_PER_TEAM)
         .filter(|&i| !obs.own[i].fallen)
         .map(|i| (dist([obs.own[i].x, obs.own[i].y], ball), i))
@@ -1049,6 +1118,32 @@ mod tests {
         // Close to goal but robot-ball-goal not aligned: no shot.
         let o = obs(1, robot(2.0, -1.0, 0.0), [2.18, -1.0]);
         assert_ne!(s.act(&o), Action::Shoot);
+    }
+
+    #[test]
+    fn a_reading_player_walks_to_where_the_rolling_ball_will_be() {
+        // The ball 0.6 m straight ahead, rolling across at 1 m/s: it stops
+        // about 1.25 m to the left.
+        let mut o = obs(1, robot(0.0, 0.0, 0.0), [0.6, 0.0]);
+        o.ball.vy = 1.0;
+        let mut s = Scripted::new(ScriptedParams::default());
+        assert_eq!(s.act(&o), Action::Forward, "without lead: at the ball");
+        let reading = ScriptedParams::parse_spec("lead=3").unwrap();
+        let mut s = Scripted::new(reading);
+        let at = s.my_ball(&o);
+        assert!(
+            (at[0] - 0.6).abs() < 1e-6 && at[1] > 1.0 && at[1] < 1.25,
+            "{at:?}"
+        );
+        assert_eq!(
+            s.act(&o),
+            Action::TurnLeft,
+            "with lead: toward where it stops"
+        );
+        // A ball at rest reads the same with or without lead.
+        o.ball.vy = 0.0;
+        assert_eq!(s.my_ball(&o), [0.6, 0.0]);
+        assert_eq!(s.team_ball(&o), [0.6, 0.0]);
     }
 
     #[test]
