@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use naosoccer_client::{Policy, PolicyKind};
+use naosoccer_policy::{Policy, PolicyKind};
 use naosoccer_proto::{Action, Event, MatchStats, Observation, RobotId, ROBOTS};
 use naosoccer_referee::{blank_observation, Match, MatchConfig, MatchError};
 

@@ -31,8 +31,8 @@ pub struct BenchLearnArgs {
 /// PPO end to end (matches vs the scripted team, inference, updates), then
 /// the environment alone with random actions, in robot transitions a second.
 pub fn bench_learn(a: BenchLearnArgs) -> anyhow::Result<()> {
-    use naosoccer_client::PolicyKind;
     use naosoccer_learn::env::{EnvConfig, Opponent, VecEnv};
+    use naosoccer_policy::PolicyKind;
     use rand::{Rng, SeedableRng};
 
     tch::set_num_threads(a.torch_threads.max(1));

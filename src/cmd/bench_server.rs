@@ -124,7 +124,7 @@ async fn bench_round_watched(
     live: Option<Arc<naosoccer::live::LiveServer>>,
 ) -> anyhow::Result<(std::time::Duration, u64, usize, u64, Watched)> {
     use naosoccer_client::robot::{run_team, TeamRun};
-    use naosoccer_client::PolicyKind;
+    use naosoccer_policy::PolicyKind;
     use naosoccer_proto::msg::{MatchId, Player};
     use naosoccer_proto::Team;
     let tokens = cfg.resolve_tokens();
@@ -345,7 +345,7 @@ pub fn bench(args: BenchServerArgs) -> anyhow::Result<()> {
 }
 
 fn in_process_ticks(cfg: &naosoccer_referee::MatchConfig, seed: u64) -> anyhow::Result<u64> {
-    use naosoccer_client::PolicyKind;
+    use naosoccer_policy::PolicyKind;
     use naosoccer_proto::{Action, RobotId, ROBOTS};
     let mut game = naosoccer_referee::Match::new(cfg, seed)?;
     let mut policies: Vec<_> = RobotId::all()

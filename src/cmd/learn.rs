@@ -319,7 +319,7 @@ pub(crate) fn run_train(a: TrainArgs, tick: &mut dyn FnMut()) -> anyhow::Result<
     cfg.learners = parse_players(&a.learners).map_err(anyhow::Error::msg)?;
     cfg.teammates = a
         .teammates
-        .parse::<naosoccer_client::PolicyKind>()
+        .parse::<naosoccer_policy::PolicyKind>()
         .map_err(anyhow::Error::msg)?
         .to_string();
     cfg.opponent = a

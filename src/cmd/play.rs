@@ -8,7 +8,7 @@ use anyhow::Context;
 use clap::Args;
 use naosoccer::live::{LiveServer, MatchStream, Pace};
 use naosoccer::runner::{self, MatchOutcome};
-use naosoccer_client::PolicyKind;
+use naosoccer_policy::PolicyKind;
 use naosoccer_proto::{Action, Event, RobotId, Team, TeamStats, Tick, ROBOTS};
 
 use super::team::TeamSpec;

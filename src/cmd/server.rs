@@ -257,7 +257,7 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
     let variant_fill = match args.fill.as_deref() {
         Some(f) if is_variant_fill(f) => Some((
             f.to_string(),
-            f.parse::<naosoccer_client::PolicyKind>()
+            f.parse::<naosoccer_policy::PolicyKind>()
                 .map_err(|e| anyhow::anyhow!("--fill: {e}"))?,
         )),
         _ => None,
@@ -300,7 +300,7 @@ pub fn run(args: ServerArgs) -> anyhow::Result<()> {
                 make: Arc::new(move |seed, _robot| {
                     let mut p = team.clone();
                     p.set_match_seed(seed);
-                    Box::new(p) as Box<dyn naosoccer_client::Policy>
+                    Box::new(p) as Box<dyn naosoccer_policy::Policy>
                 }),
             });
         }

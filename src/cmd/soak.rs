@@ -3,7 +3,8 @@
 //! the server did and how its memory went (issue 6).
 use anyhow::Context;
 use clap::Args;
-use naosoccer_client::{Client, ClientError, PolicyKind, Push};
+use naosoccer_client::{Client, ClientError, Push};
+use naosoccer_policy::PolicyKind;
 use naosoccer_proto::msg::{
     ActionMsg, ClientMsg, CreateMatch, EndReason, ErrorCode, MatchId, Mode, Player, PlayerAction,
 };

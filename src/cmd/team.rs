@@ -4,7 +4,8 @@
 //! `ppo-greedy:DIR`, `dqn:DIR`, `dqn-epsilon:DIR`; docs/LEARNING.md).
 //! `naosoccer match` and `naosoccer client` both take it.
 
-use naosoccer_client::{Policy, PolicyKind, TeamPolicy};
+use naosoccer_client::TeamPolicy;
+use naosoccer_policy::{Policy, PolicyKind};
 use naosoccer_proto::RobotId;
 
 /// A parsed team spec. A trained team has been loaded once already, so a
@@ -18,7 +19,7 @@ pub enum TeamSpec {
 impl TeamSpec {
     /// `what` names the option in errors (`--policy`, `--blue`).
     pub fn parse(spec: &str, what: &str) -> anyhow::Result<TeamSpec> {
-        if naosoccer_client::is_builtin_spec(spec) {
+        if naosoccer_policy::is_builtin_spec(spec) {
             let kind: PolicyKind = spec.parse().map_err(|e| {
                 anyhow::anyhow!("{what}: {e}, or a trained team such as ppo:DIR or dqn:DIR")
             })?;

@@ -1,7 +1,8 @@
 //! Helpers shared by the server tests (`common::server`): a real
 //! server on 127.0.0.1:0 and the in-process reference match.
 
-use naosoccer_client::{Client, PolicyKind, Push};
+use naosoccer_client::{Client, Push};
+use naosoccer_policy::PolicyKind;
 use naosoccer_proto::msg::Score;
 use naosoccer_proto::msg::{ErrorMsg, MatchEnd, Player, PlayerAction};
 use naosoccer_proto::Action;

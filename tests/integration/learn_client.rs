@@ -12,7 +12,7 @@ use common::naosoccer;
 use common::server::*;
 use naosoccer::runner::{run_to_end_with, MatchOutcome};
 use naosoccer_client::robot::{run_team, TeamRun};
-use naosoccer_client::{Policy, PolicyKind};
+use naosoccer_policy::{Policy, PolicyKind};
 use naosoccer_proto::msg::{EndReason, MatchEnd, MatchId, Player};
 use naosoccer_proto::{RobotId, Team, Tick};
 use naosoccer_referee::{Match, MatchConfig};

@@ -4,7 +4,7 @@
 //! repeatable from its seed.
 
 use naosoccer::runner::{play_match, MatchOutcome};
-use naosoccer_client::PolicyKind;
+use naosoccer_policy::PolicyKind;
 use naosoccer_referee::MatchConfig;
 
 const SEEDS: [u64; 4] = [1, 2, 3, 4];

@@ -35,7 +35,7 @@
 //! place for per-tick checks over the event stream.
 
 use naosoccer::runner::build_policies;
-use naosoccer_client::{Policy, PolicyKind};
+use naosoccer_policy::{Policy, PolicyKind};
 use naosoccer_proto::{Action, Event, Observation, RobotId, SetPlayKind, Team, ROBOTS};
 use naosoccer_referee::{blank_observation, Match, MatchConfig};
 use naosoccer_sim::{BallState, Primitive, RobotModel, RobotState, Sim};

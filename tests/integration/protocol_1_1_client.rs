@@ -8,7 +8,7 @@
 use crate::common;
 
 use common::server::*;
-use naosoccer_client::PolicyKind;
+use naosoccer_policy::PolicyKind;
 use serde::Deserialize;
 use serde_json::{json, Value};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};

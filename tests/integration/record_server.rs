@@ -5,7 +5,7 @@ use crate::common;
 
 use common::server::*;
 use naosoccer_client::robot::{run_team, TeamRun};
-use naosoccer_client::PolicyKind;
+use naosoccer_policy::PolicyKind;
 use naosoccer_proto::msg::{EndReason, MatchId, Player};
 use naosoccer_proto::Team;
 use naosoccer_record::{replay, Recording, ReplayOutcome};

@@ -5,7 +5,8 @@ use crate::common;
 
 use common::server::*;
 use naosoccer_client::robot::{run_team, TeamRun};
-use naosoccer_client::{Client, PolicyKind, Push};
+use naosoccer_client::{Client, Push};
+use naosoccer_policy::PolicyKind;
 use naosoccer_proto::msg::{EndReason, ErrorCode, MatchId, Player, PlayerAction, Score};
 use naosoccer_proto::{Action, Team, Tick, PLAYERS_PER_TEAM};
 

@@ -5,7 +5,8 @@
 use crate::common;
 
 use common::server::*;
-use naosoccer_client::{Client, ClientError, PolicyKind, Push};
+use naosoccer_client::{Client, ClientError, Push};
+use naosoccer_policy::PolicyKind;
 use naosoccer_proto::msg::{
     CreateMatch, EndReason, ErrorCode, Frame, Hello, MatchEnd, MatchId, MatchState, Pitch, Player,
     PlayerAction, Version, PROTOCOL_NAME,
@@ -319,7 +320,7 @@ async fn a_client_joining_mid_match_gets_the_events_of_the_tick_before() {
 /// every client knows: `fill` "scripted" and `fill_team` "scripted:5".
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_level_of_the_ladder_fills_the_empty_slots() {
-    use naosoccer_client::policy::ScriptedParams;
+    use naosoccer_policy::ScriptedParams;
     use naosoccer_proto::msg::Fill;
     let cfg = config(300);
     let match_cfg = cfg.match_cfg.clone();

@@ -11,10 +11,10 @@
 //!
 //! `cargo run --release -p naosoccer-learn --example probe_drill -- ppo:DIR [OPPONENT] [DRILLS] [SEED] [ANGLE]`
 
-use naosoccer_client::policy::PolicyKind;
 use naosoccer_learn::env::{EnvConfig, Opponent, PassDrills, VecEnv};
 use naosoccer_learn::LearnedPolicy;
 use naosoccer_policy::obs::ObsScale;
+use naosoccer_policy::PolicyKind;
 use naosoccer_proto::{Observation, Tick};
 use naosoccer_referee::MatchConfig;
 

@@ -18,11 +18,11 @@
 //!
 //! `cargo run --release -p naosoccer-learn --example probe_play -- ppo:DIR|scripted [OPPONENT] [MATCHES] [force]`
 
-use naosoccer_client::policy::{Policy, PolicyKind};
 use naosoccer_learn::obs::{ball_in_robot_frame, ObsScale};
 use naosoccer_learn::policy::is_free;
 use naosoccer_learn::LearnedPolicy;
 use naosoccer_policy::actions::ACTION_NAMES;
+use naosoccer_policy::{Policy, PolicyKind};
 use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::rules::segment_distance;
 use naosoccer_referee::{Match, MatchConfig};

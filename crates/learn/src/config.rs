@@ -5,8 +5,8 @@
 //! schedule's runner and the training loops all read it; it reads none of
 //! them.
 
-use naosoccer_client::PolicyKind;
 use naosoccer_policy::actions::{action_count, DecisionConfig};
+use naosoccer_policy::PolicyKind;
 use naosoccer_referee::MatchConfig;
 use serde::{Deserialize, Serialize};
 

@@ -17,7 +17,7 @@
 //! This module is what a schedule says (it is part of the run's
 //! configuration); [`crate::schedule_runner`] plays one.
 
-use naosoccer_client::PolicyKind;
+use naosoccer_policy::PolicyKind;
 use serde::{Deserialize, Serialize};
 
 /// One stage of a schedule.

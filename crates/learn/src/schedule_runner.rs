@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use naosoccer_client::PolicyKind;
+use naosoccer_policy::PolicyKind;
 
 use crate::config::TrainConfig;
 use crate::env::{Opponent, VecEnv};

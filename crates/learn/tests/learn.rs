@@ -4,11 +4,11 @@
 
 use std::path::{Path, PathBuf};
 
-use naosoccer_client::PolicyKind;
 use naosoccer_learn::env::{EnvConfig, Opponent, VecEnv};
 use naosoccer_learn::train::{train, Algo, OpponentSpec, TrainConfig};
 use naosoccer_learn::{LearnedPolicy, OBS_DIM};
 use naosoccer_policy::actions::DecisionConfig;
+use naosoccer_policy::PolicyKind;
 use naosoccer_proto::{Action, Tick};
 use naosoccer_referee::MatchConfig;
 use rand::{Rng, SeedableRng};
@@ -218,9 +218,9 @@ fn same_seed_and_threads_give_identical_metrics() {
 /// draws, and greedy play ignores them.
 #[test]
 fn sampled_actions_do_not_depend_on_batching() {
-    use naosoccer_client::Policy;
     use naosoccer_learn::policy::sample_uniform;
     use naosoccer_learn::ActMode;
+    use naosoccer_policy::Policy;
     use naosoccer_proto::Team;
     use naosoccer_referee::Match;
 
@@ -561,10 +561,10 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
 /// changes its action only when its persistence ran out.
 #[test]
 fn team_policies_decide_alike_however_they_are_asked() {
-    use naosoccer_client::Policy;
     use naosoccer_learn::config::PpoConfig;
     use naosoccer_learn::ppo::SHOOT;
     use naosoccer_learn::ActMode;
+    use naosoccer_policy::Policy;
     use naosoccer_proto::Team;
     use naosoccer_referee::Match;
 

@@ -18,7 +18,7 @@
 //! of blocks merge ([`EvalReport::merge`]) into the report of the whole run,
 //! statistics and all, computed here and nowhere else.
 
-use naosoccer_client::{Policy, PolicyKind};
+use crate::{Policy, PolicyKind};
 use naosoccer_proto::{
     Action, Event, MatchStats, Observation, PerTeam, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
@@ -39,7 +39,7 @@ impl Side {
     /// `scripted` | `scripted:KEY=VAL,...` | `scripted:FILE.toml` | `random`
     /// | `idle` | `ppo:DIR` | `dqn:DIR` (and the other trained-team specs).
     pub fn parse(spec: &str) -> Result<Side, PolicyError> {
-        if !naosoccer_client::is_builtin_spec(spec) {
+        if !crate::is_builtin_spec(spec) {
             return Ok(Side::Learned(Box::new(LearnedPolicy::load(spec)?)));
         }
         spec.parse::<PolicyKind>()

@@ -20,7 +20,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use naosoccer_client::Policy;
+use crate::Policy;
 use naosoccer_proto::{Action, Observation, Tick};
 use serde::{Deserialize, Serialize};
 

@@ -1,6 +1,9 @@
-//! Trained teams as players, without libtorch: everything playing a
-//! `naosoccer train` run needs, and nothing training needs.
+//! The players: the `Policy` trait, the built-in teams and trained teams,
+//! without libtorch: everything playing a `naosoccer train` run needs, and
+//! nothing training needs.
 //!
+//! - [`bots`]: the [`Policy`] trait and the built-in teams (the scripted
+//!   ladder, random, idle) with their specs ([`PolicyKind`]).
 //! - [`obs`]: the observation vector (versioned layout, see docs/LEARNING.md).
 //! - [`actions`]: the action table, the decision-level MDP's holds, the
 //!   sampling draws.
@@ -16,6 +19,7 @@
 //! libtorch.
 
 pub mod actions;
+pub mod bots;
 mod error;
 pub mod eval;
 pub mod league;
@@ -28,6 +32,10 @@ use naosoccer_proto::Observation;
 pub use actions::{
     approach_action, support_action, to_action, DecisionConfig, SupportSpot, ACTIONS, APPROACH,
     MAX_ACTIONS, PASS, SHOOT, STAY, SUPPORT,
+};
+pub use bots::{
+    is_builtin_spec, Idle, ParsePolicyError, Policy, PolicyKind, RandomPolicy, Scripted,
+    ScriptedParams,
 };
 pub use error::PolicyError;
 pub use learned::{

@@ -7,7 +7,7 @@
 use std::f32::consts::PI;
 use std::path::Path;
 
-use naosoccer_client::Policy;
+use naosoccer_policy::Policy;
 use naosoccer_policy::{LearnedPolicy, PlayConfig, Weights, PASS, SUPPORT};
 use naosoccer_proto::{Action, Team, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};

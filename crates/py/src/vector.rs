@@ -14,9 +14,9 @@
 //! slots, so a slot's first match after `reset(s)` is `naosoccer match
 //! --seed s+i`.
 
-use naosoccer_client::Policy;
 use naosoccer_policy::actions::{action_count, banned_actions, to_action, SupportSpot};
 use naosoccer_policy::eval::Side;
+use naosoccer_policy::Policy;
 use naosoccer_policy::{DecisionConfig, ObsScale, PolicyError, OBS_DIM, SHOOT};
 use naosoccer_proto::{
     Action, MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
@@ -193,7 +193,7 @@ impl VecMatches {
         }
         scale.version = spec.obs_version;
         let opponent = match spec.controlled {
-            Controlled::Both => Side::Builtin(naosoccer_client::PolicyKind::Idle),
+            Controlled::Both => Side::Builtin(naosoccer_policy::PolicyKind::Idle),
             Controlled::Team(_) => Side::parse(&spec.opponent)?,
         };
         Ok(VecMatches {
@@ -540,8 +540,8 @@ mod tests {
             let m = Match::new(&spec(1, "", 0.1).config, f.seed).unwrap();
             let policies = RobotId::all()
                 .map(|r| match r.team() {
-                    Team::Blue => naosoccer_client::PolicyKind::Idle.build(f.seed, r),
-                    Team::Red => naosoccer_client::PolicyKind::Scripted.build(f.seed, r),
+                    Team::Blue => naosoccer_policy::PolicyKind::Idle.build(f.seed, r),
+                    Team::Red => naosoccer_policy::PolicyKind::Scripted.build(f.seed, r),
                 })
                 .collect::<Vec<_>>();
             let hash = play(m, policies);

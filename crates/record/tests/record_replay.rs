@@ -3,7 +3,7 @@
 
 use std::io::Cursor;
 
-use naosoccer_client::policy::PolicyKind;
+use naosoccer_policy::PolicyKind;
 use naosoccer_proto::{Action, RobotId, Team, Tick, ROBOTS};
 use naosoccer_record::{
     replay, MatchMeta, Recorder, RecorderOptions, Recording, RecordingSummary, ReplayOutcome,

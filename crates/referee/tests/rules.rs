@@ -808,7 +808,7 @@ fn issue_13_shaping_telescopes_between_restarts() {
     let mut sum = [0.0f64; ROBOTS];
     let mut jumps = [0.0f64; ROBOTS];
     let mut policies: Vec<_> = RobotId::all()
-        .map(|r| naosoccer_client::PolicyKind::Scripted.build(9, r))
+        .map(|r| naosoccer_policy::PolicyKind::Scripted.build(9, r))
         .collect();
     let mut restarts = 0;
     while !m.is_finished() {
@@ -882,7 +882,7 @@ fn issue_13_shaping_telescopes_between_restarts() {
 
 /// Plays `n` whole matches of `kind` against itself with seeds `0..n` on two
 /// threads; returns (blue wins, red wins, draws).
-fn self_play_results(kind: naosoccer_client::PolicyKind, n: u64, minutes: f32) -> [u32; 3] {
+fn self_play_results(kind: naosoccer_policy::PolicyKind, n: u64, minutes: f32) -> [u32; 3] {
     let cfg = MatchConfig {
         minutes,
         ..MatchConfig::default()
@@ -935,8 +935,8 @@ fn side_bias(blue: u32, red: u32) -> Option<f64> {
 #[test]
 fn issue_12_mirror_matches_favour_neither_side() {
     for (kind, n) in [
-        (naosoccer_client::PolicyKind::Random, 300),
-        (naosoccer_client::PolicyKind::Scripted, 100),
+        (naosoccer_policy::PolicyKind::Random, 300),
+        (naosoccer_policy::PolicyKind::Scripted, 100),
     ] {
         let [blue, red, draws] = self_play_results(kind, n, 10.0);
         eprintln!("{kind}: blue {blue}, red {red}, draws {draws}");
@@ -953,7 +953,7 @@ fn issue_12_mirror_matches_favour_neither_side() {
 /// constants cannot drift from `assets/match.toml` unnoticed.
 #[test]
 fn scripted_defaults_agree_with_the_default_match() {
-    use naosoccer_client::policy::ScriptedParams;
+    use naosoccer_policy::ScriptedParams;
     let m = Match::new(&MatchConfig::default(), 1).unwrap();
     let d = ScriptedParams::default();
     assert_eq!(ScriptedParams::for_pitch(&m.pitch()), d);

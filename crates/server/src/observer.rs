@@ -39,7 +39,7 @@ pub type ObserverFactory = dyn Fn(&MatchInfo) -> Option<Box<dyn MatchObserver>> 
 /// Makes the policy that plays robot `RobotId`'s slot, if nobody joins it,
 /// in a match of the given seed.
 pub type FillFactory =
-    dyn Fn(u64, naosoccer_proto::RobotId) -> Box<dyn naosoccer_client::Policy> + Send + Sync;
+    dyn Fn(u64, naosoccer_proto::RobotId) -> Box<dyn naosoccer_policy::Policy> + Send + Sync;
 
 /// A team that plays the slots nobody joined, in every match, instead of
 /// the match's `fill` (`naosoccer server --fill ppo:DIR`: a trained team).

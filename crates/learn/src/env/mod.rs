@@ -13,7 +13,7 @@
 //! Over it, [`decisions`] is the decision-level MDP the team presets learn
 //! on: holds, masks and open decisions, each closed decision one transition.
 
-use naosoccer_client::{Policy, PolicyKind};
+use naosoccer_policy::{Policy, PolicyKind};
 use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 

@@ -1,7 +1,7 @@
 //! Who plays against the learner, and how each episode draws its opponent
 //! from a weighted mix.
 
-use naosoccer_client::PolicyKind;
+use naosoccer_policy::PolicyKind;
 
 use super::episode_seed;
 use crate::LearnError;

@@ -2,7 +2,7 @@
 //! learning robots' teammates, the first opponents, drills; and the checks
 //! of which settings go together, made before anything is built.
 
-use naosoccer_client::PolicyKind;
+use naosoccer_policy::PolicyKind;
 
 use crate::config::{run_scale, Algo, OpponentSpec, TrainConfig};
 use crate::env::{EnvConfig, Opponent, VecEnv};
