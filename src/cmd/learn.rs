@@ -41,7 +41,7 @@ fn parse_players(s: &str) -> Result<Vec<usize>, String> {
 
 Every other setting of a run (the team preset's actions and roles, pass
 drills, the observation layout, PPO and DQN hyperparameters, learners and
-teammates: 31 in all) is a recipe field and is also accepted here as an
+teammates: 32 in all) is a recipe field and is also accepted here as an
 option of the same name (--KEY VALUE, --KEY for a switch); docs/RECIPES.md
 lists them in one table.
 
@@ -67,7 +67,7 @@ pub struct TrainArgs {
     #[arg(long, value_name = "FILE", conflicts_with_all = [
         "algo", "steps", "resume", "preset", "persist", "no_shoot_mask", "pass_action",
         "support_action", "support_hold", "support_roles", "support_only", "support_spot",
-        "approach_action", "approach_only", "init_from", "pass_init", "support_init_bias",
+        "approach_action", "approach_only", "own_goal_guard", "init_from", "pass_init", "support_init_bias",
         "central_critic", "minibatches", "entropy_coef", "gamma", "target_kl", "lr", "drill",
         "pass_drills", "pass_drill_seconds", "pass_drill_angle", "obs_version", "opponent",
         "matches", "threads", "torch_threads", "config", "minutes", "learners", "teammates",
@@ -164,6 +164,14 @@ pub struct TrainArgs {
     /// move by `approach` and `support` only (and `stay`, `shoot`, `pass`).
     #[arg(long, hide = true, requires = "approach_action")]
     approach_only: bool,
+    /// Team presets: the own-goal guard. Near its own goal line (the ball
+    /// within 0.6 m of it, in front of the goal) a robot facing its own
+    /// goal with the ball just ahead may not walk `forward` or `shoot`, so
+    /// it cannot push or kick the ball into its own goal; it turns, waits
+    /// or passes instead. Recorded in the run's configuration, so the team
+    /// plays the same way in `match`, `eval` and over the socket.
+    #[arg(long, hide = true)]
+    own_goal_guard: bool,
     /// PPO team preset: start from these weights (a run directory's
     /// final.safetensors, or a .safetensors checkpoint) with a fresh
     /// optimiser; the networks must have the run's shape, except that a
@@ -392,10 +400,19 @@ pub(crate) fn run_train(a: TrainArgs, tick: &mut dyn FnMut()) -> anyhow::Result<
         }
         d.approach = a.approach_action;
         d.approach_only = a.approach_only;
+        let sim = &cfg.match_config.sim;
+        d.own_goal_guard = a
+            .own_goal_guard
+            .then(|| naosoccer_policy::OwnGoalGuard::for_pitch(sim.field_length, sim.goal_width));
     } else {
         anyhow::ensure!(
-            a.persist.is_none() && !a.no_shoot_mask && !a.pass_action && !a.support_action,
-            "--persist, --no-shoot-mask, --pass-action and --support-action apply to the team preset"
+            a.persist.is_none()
+                && !a.no_shoot_mask
+                && !a.pass_action
+                && !a.support_action
+                && !a.own_goal_guard,
+            "--persist, --no-shoot-mask, --pass-action, --support-action and --own-goal-guard \
+             apply to the team preset"
         );
     }
     cfg.init_from = a.init_from.clone();

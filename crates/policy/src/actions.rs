@@ -7,6 +7,8 @@ use naosoccer_proto::{Action, Observation, Tick};
 use naosoccer_referee::rules::wrap_angle;
 use serde::{Deserialize, Serialize};
 
+use crate::guard::OwnGoalGuard;
+
 /// The paper's discrete actions, in `proto::Action::from_index` order:
 /// forward, turn left, turn right, shoot, stay. A team trained with
 /// [`DecisionConfig::pass`] has a sixth, `pass` ([`PASS`]), one trained
@@ -162,6 +164,11 @@ pub struct DecisionConfig {
     /// from older runs' configurations: `false`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub approach_only: bool,
+    /// The own-goal guard ([`OwnGoalGuard`]): near its own goal a robot
+    /// facing that goal may not walk into the ball or kick it. Absent from
+    /// older runs' configurations: off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub own_goal_guard: Option<OwnGoalGuard>,
 }
 
 fn is_zero(v: &u32) -> bool {
@@ -206,6 +213,7 @@ impl DecisionConfig {
             support_spot: SupportSpot::Ahead,
             approach: false,
             approach_only: false,
+            own_goal_guard: None,
         }
     }
 
@@ -447,9 +455,10 @@ pub const APPROACH_ONLY_BANNED: u8 = ROLE_BANNED;
 /// encoder); [`ROLE_BANNED`] (and `approach`) for a robot that is not a
 /// chaser under [`DecisionConfig::chasers`] ([`SUPPORT_ONLY_BANNED`] with
 /// [`DecisionConfig::support_only`]); [`APPROACH_ONLY_BANNED`] for every
-/// robot under [`DecisionConfig::approach_only`].
+/// robot under [`DecisionConfig::approach_only`]; `forward` and `shoot`
+/// where [`DecisionConfig::own_goal_guard`] holds.
 pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> u8 {
-    let mut banned = 0;
+    let mut banned = decision.own_goal_guard.map_or(0, |g| g.banned(obs));
     if decision.pass && !pass_possible(obs, in_reach) {
         banned |= 1 << PASS;
     }

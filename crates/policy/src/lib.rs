@@ -22,6 +22,7 @@ pub mod actions;
 pub mod bots;
 mod error;
 pub mod eval;
+pub mod guard;
 pub mod league;
 pub mod learned;
 pub mod mlp;
@@ -38,6 +39,7 @@ pub use bots::{
     ScriptedParams,
 };
 pub use error::PolicyError;
+pub use guard::OwnGoalGuard;
 pub use learned::{
     is_learned_spec, load_policy, load_policy_for_match, ActMode, Algo, LearnedPolicy, PlayConfig,
 };
