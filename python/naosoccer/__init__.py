@@ -3,6 +3,8 @@
 * :class:`VectorEnv`: many matches stepped in this process by the native
   extension, as a Gymnasium vector env (numpy in and out).
 * :func:`binary_path`: the ``naosoccer`` binary the package carries.
+* :func:`export_policy`: a PPO actor trained on a :class:`VectorEnv` written as
+  a team directory that ``naosoccer eval --blue ppo:DIR`` plays.
 * :class:`Client`: the socket protocol (handshake, matches, join, actions).
 * :class:`NaoSoccerParallelEnv`: one team as a PettingZoo ``ParallelEnv``.
 * :class:`LocalServer`: ``naosoccer server`` as a subprocess on a free port.
@@ -17,6 +19,7 @@ See docs/PYTHON.md in the repository.
 from .client import Client
 from .env import OPPONENTS, NaoSoccerParallelEnv
 from .errors import NaoSoccerError, ProtocolError, ServerStartError
+from .export import export_policy
 from .obs import (
     FEATURE_NAMES,
     OBS_DIM,
@@ -51,6 +54,7 @@ __all__ = [
     "ServerStartError",
     "VectorEnv",
     "binary_path",
+    "export_policy",
     "find_binary",
     "team_layout",
     "team_rewards",

@@ -22,6 +22,7 @@ pub mod actions;
 pub mod bots;
 mod error;
 pub mod eval;
+pub mod export;
 pub mod guard;
 pub mod league;
 pub mod learned;

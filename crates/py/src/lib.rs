@@ -7,11 +7,12 @@ pub mod vector;
 
 use std::sync::Mutex;
 
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use naosoccer_policy::export::{write_ppo_team, Layer};
 use naosoccer_policy::DecisionConfig;
 use naosoccer_referee::MatchConfig;
 use vector::{Controlled, EnvSpec, Finished, StepOut, VecEnvError, VecMatches};
@@ -154,6 +155,34 @@ impl VecMatchesPy {
     /// Each slot's current state hash.
     fn state_hashes(&self) -> Vec<u64> {
         lock(&self.inner).state_hashes()
+    }
+
+    /// Writes a PPO actor that reads this env's observations and chooses
+    /// among its actions as a team directory (`config.json`,
+    /// `final.safetensors`) that `naosoccer eval --blue ppo:DIR` plays.
+    /// `layers`: `(weight, bias)` float32 arrays per linear layer, weight
+    /// `(outputs, inputs)` as torch's `nn.Linear` holds it, tanh between
+    /// layers, the last layer's outputs the logits.
+    fn write_team(
+        &self,
+        dir: &str,
+        layers: Vec<(PyReadonlyArray2<'_, f32>, PyReadonlyArray1<'_, f32>)>,
+    ) -> PyResult<()> {
+        let mut out = Vec::with_capacity(layers.len());
+        for (i, (w, b)) in layers.iter().enumerate() {
+            let [rows, cols] = w.shape() else {
+                return Err(value_error(format!("layer {i}: the weight is not 2-D")));
+            };
+            out.push(Layer {
+                weight: w.as_array().iter().copied().collect(),
+                rows: *rows,
+                cols: *cols,
+                bias: b.as_array().iter().copied().collect(),
+            });
+        }
+        let env = lock(&self.inner);
+        write_ppo_team(std::path::Path::new(dir), &out, env.scale(), env.decision())
+            .map_err(value_error)
     }
 }
 

@@ -233,6 +233,12 @@ impl VecMatches {
         self.scale
     }
 
+    /// The action set and masks the robots decide under (`None`: the
+    /// paper's five, never masked).
+    pub fn decision(&self) -> Option<DecisionConfig> {
+        self.decision
+    }
+
     /// Starts every slot's first match, slot `i` with seed `seed + i`, and
     /// writes their first observations and masks.
     pub fn reset(&mut self, seed: u64) -> Result<StepOut, VecEnvError> {
