@@ -1,0 +1,137 @@
+//! Which actions a robot may choose now: the roles under `chasers`, the
+//! pass rule, and the logit masks built from them.
+
+use naosoccer_proto::Observation;
+
+use super::{
+    DecisionConfig, ACTIONS, APPROACH, FORWARD, MASKED_LOGIT, PASS, SHOOT, STAY, TURN_LEFT,
+    TURN_RIGHT,
+};
+
+/// Whether the robot that received `obs` may `pass` now: the ball is in
+/// kick reach (`in_reach`, from the encoder) and there is a receiver.
+pub fn pass_possible(obs: &Observation, in_reach: bool) -> bool {
+    in_reach && naosoccer_proto::pass_receiver(obs).is_some()
+}
+
+/// Whether the robot that received `obs` is one of its team's `chasers`
+/// under [`DecisionConfig::chasers`]: it stands, and fewer than `chasers`
+/// standing teammates are nearer the ball (on a tie, the lower player
+/// number is nearer). Read from the observation alone, so in-process and
+/// socket play agree.
+pub fn is_chaser(obs: &Observation, chasers: u32) -> bool {
+    let me = obs.player.index();
+    if obs.own[me].fallen {
+        return false;
+    }
+    let mine = ball_distance(obs, &obs.own[me]);
+    let nearer = standing_teammates(obs)
+        .filter(|&(j, d)| d < mine || (d == mine && j < me))
+        .count();
+    nearer < chasers as usize
+}
+
+/// How far `r` stands from the ball in `obs`, metres.
+fn ball_distance(obs: &Observation, r: &naosoccer_proto::RobotObs) -> f32 {
+    (r.x - obs.ball.x).hypot(r.y - obs.ball.y)
+}
+
+/// The standing teammates of the robot that received `obs` (not the robot
+/// itself), as (player number, distance to the ball), by player number.
+fn standing_teammates(obs: &Observation) -> impl Iterator<Item = (usize, f32)> + '_ {
+    let me = obs.player.index();
+    obs.own
+        .iter()
+        .enumerate()
+        .filter(move |&(j, r)| j != me && !r.fallen)
+        .map(|(j, r)| (j, ball_distance(obs, r)))
+}
+
+/// The standing teammate nearest the ball (on a tie the lower player
+/// number; not the robot itself), as (distance to the ball, player
+/// number), or `None` with every teammate down.
+pub(super) fn nearest_standing_teammate(obs: &Observation) -> Option<(f32, usize)> {
+    standing_teammates(obs).fold(None, |best, (j, d)| match best {
+        Some((b, _)) if b <= d => best,
+        _ => Some((d, j)),
+    })
+}
+
+/// The actions a robot that is not one of its team's chasers may not choose
+/// under [`DecisionConfig::chasers`], as bits (`1 << index`): `forward` and
+/// the turns (and `approach`, for a team that has it).
+pub const ROLE_BANNED: u8 = 1 << FORWARD | 1 << TURN_LEFT | 1 << TURN_RIGHT;
+
+/// What a robot that does not chase may not choose under
+/// [`DecisionConfig::support_only`]: [`ROLE_BANNED`] and `stay`.
+pub const SUPPORT_ONLY_BANNED: u8 = ROLE_BANNED | 1 << STAY;
+
+/// What no robot may choose under [`DecisionConfig::approach_only`]:
+/// `forward` and the turns, the bits of [`ROLE_BANNED`].
+pub const APPROACH_ONLY_BANNED: u8 = ROLE_BANNED;
+
+/// The actions, beyond a `shoot` out of reach, that the robot that received
+/// `obs` may not choose now under `decision`, as bits (`1 << index`):
+/// `pass` without a receiver or out of reach (`in_reach`, from the
+/// encoder); [`ROLE_BANNED`] (and `approach`) for a robot that is not a
+/// chaser under [`DecisionConfig::chasers`] ([`SUPPORT_ONLY_BANNED`] with
+/// [`DecisionConfig::support_only`]); [`APPROACH_ONLY_BANNED`] for every
+/// robot under [`DecisionConfig::approach_only`]; `forward` and `shoot`
+/// where [`DecisionConfig::own_goal_guard`] holds.
+pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> u8 {
+    let mut banned = decision.own_goal_guard.map_or(0, |g| g.banned(obs));
+    if decision.pass && !pass_possible(obs, in_reach) {
+        banned |= 1 << PASS;
+    }
+    if decision.approach_only {
+        banned |= APPROACH_ONLY_BANNED;
+    }
+    if decision.chasers > 0 && !is_chaser(obs, decision.chasers) {
+        banned |= if decision.support_only {
+            SUPPORT_ONLY_BANNED
+        } else {
+            ROLE_BANNED
+        };
+        if decision.approach {
+            banned |= 1 << APPROACH;
+        }
+    }
+    banned
+}
+
+/// Additive logit masks for `n` rows: 0, or [`MASKED_LOGIT`] on `shoot`
+/// where `shoot_ok` is false.
+pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
+    action_mask(shoot_ok, &[], ACTIONS)
+}
+
+/// The bans of row `i` of `banned` ([`banned_actions`]) for rows of
+/// `actions` actions: a row beyond `banned` may not `pass`.
+pub fn row_bans(banned: &[u8], i: usize, actions: usize) -> u8 {
+    let missing = if actions > PASS { 1 << PASS } else { 0 };
+    banned.get(i).copied().unwrap_or(missing)
+}
+
+/// Adds [`MASKED_LOGIT`] to the entries of `row` (one row of logits) that
+/// `bans` ([`banned_actions`]) bans.
+pub fn mask_row(row: &mut [f32], bans: u8) {
+    for (a, x) in row.iter_mut().enumerate().take(8) {
+        if bans & (1 << a) != 0 {
+            *x += MASKED_LOGIT;
+        }
+    }
+}
+
+/// Additive logit masks for rows of `actions` logits: [`MASKED_LOGIT`] on
+/// `shoot` where `shoot_ok` is false and on what `banned` bans
+/// ([`banned_actions`]; a row beyond it may not `pass`).
+pub fn action_mask(shoot_ok: &[bool], banned: &[u8], actions: usize) -> Vec<f32> {
+    let mut m = vec![0.0; shoot_ok.len() * actions];
+    for (i, (&ok, row)) in shoot_ok.iter().zip(m.chunks_exact_mut(actions)).enumerate() {
+        if !ok {
+            row[SHOOT] = MASKED_LOGIT;
+        }
+        mask_row(row, row_bans(banned, i, actions));
+    }
+    m
+}

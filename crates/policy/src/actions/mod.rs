@@ -1,0 +1,294 @@
+//! The action table and how a network's outputs become actions: the five
+//! discrete actions, the decision-level MDP's holds, the sampling draws and
+//! the inverse-CDF sampler. Training (crates/learn) and play share them, so
+//! a team decides in play exactly as it did in training.
+//!
+//! This file holds the action table, the decision-level MDP's settings and
+//! the sampling draws; `steps.rs` what `support` and `approach` turn into,
+//! `masks.rs` which actions a robot may choose (roles, the pass rule, the
+//! logit masks) and `hold.rs` a robot's hold. All are re-exported here.
+
+use naosoccer_proto::Tick;
+use serde::{Deserialize, Serialize};
+
+use crate::guard::OwnGoalGuard;
+
+mod hold;
+mod masks;
+mod steps;
+
+pub use hold::{is_free, Hold};
+pub use masks::{
+    action_mask, banned_actions, is_chaser, mask_row, pass_possible, row_bans, shoot_mask,
+    APPROACH_ONLY_BANNED, ROLE_BANNED, SUPPORT_ONLY_BANNED,
+};
+pub use steps::{
+    approach_action, support_action, support_spot, to_action, APPROACH_ALIGN, APPROACH_BEHIND,
+    APPROACH_LATERAL, APPROACH_MIN_CONE, APPROACH_NEAR, SUPPORT_AHEAD, SUPPORT_ARRIVE,
+    SUPPORT_FACE_CONE, SUPPORT_RELEASE_BALL, SUPPORT_SIDE, SUPPORT_WALK_CONE,
+};
+
+/// The paper's discrete actions, in `proto::Action::from_index` order:
+/// forward, turn left, turn right, shoot, stay. A team trained with
+/// [`DecisionConfig::pass`] has a sixth, `pass` ([`PASS`]), one trained
+/// with [`DecisionConfig::support`] a seventh, `support` ([`SUPPORT`]), and
+/// one trained with [`DecisionConfig::approach`] an eighth, `approach`
+/// ([`APPROACH`]).
+pub const ACTIONS: usize = 5;
+
+/// The most actions a network has (the paper's five, `pass`, `support`
+/// and `approach`).
+pub const MAX_ACTIONS: usize = 8;
+
+/// Index of `pass`, the sixth action of teams trained with it.
+pub const PASS: usize = 5;
+
+/// Index of `support`, the seventh action of teams trained with it. It is
+/// not a protocol action: the team's policy turns it, every tick, into the
+/// `forward`, turn or `stay` that walks the robot to its support spot
+/// ([`support_action`]).
+pub const SUPPORT: usize = 6;
+
+/// Index of `approach`, the eighth action of teams trained with it. Like
+/// `support` it is not a protocol action: the team's policy turns it, every
+/// tick, into the `forward` or turn that walks the robot round behind the
+/// ball, onto the line from the ball to the opponent goal, and then into
+/// the ball facing that way ([`approach_action`]).
+pub const APPROACH: usize = 7;
+
+/// The actions' names, by index: the protocol's five, then `pass`,
+/// `support` and `approach`.
+pub const ACTION_NAMES: [&str; MAX_ACTIONS] = [
+    "forward",
+    "turn_left",
+    "turn_right",
+    "shoot",
+    "stay",
+    "pass",
+    "support",
+    "approach",
+];
+
+/// Index of `forward`.
+pub const FORWARD: usize = 0;
+
+/// Index of `turn_left`.
+pub const TURN_LEFT: usize = 1;
+/// Index of `turn_right`.
+pub const TURN_RIGHT: usize = 2;
+/// Index of `shoot` among the actions.
+pub const SHOOT: usize = 3;
+/// Index of `stay`.
+pub const STAY: usize = 4;
+
+/// A logit this low makes an action impossible (its probability underflows to 0).
+pub const MASKED_LOGIT: f32 = -1e9;
+
+/// The decision-level MDP (`team` presets). A setting this build does not
+/// know is refused rather than ignored: a team trained with it would
+/// otherwise play here without it, silently differently.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DecisionConfig {
+    /// Ticks a movement decision (`forward`, turns, `stay`) lasts before the
+    /// robot decides again (a `shoot` lasts as long as the kick keeps it busy).
+    pub persist: u32,
+    /// `shoot` is impossible while the ball is out of kick reach.
+    pub mask_shoot: bool,
+    /// The robots have a sixth action, `pass` (protocol 1.3), possible only
+    /// while the ball is in kick reach and `proto::pass_receiver` names a
+    /// teammate. Absent from older runs' configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub pass: bool,
+    /// The robots have a seventh action, `support` (needs `pass`): walk to
+    /// the support spot ahead of the ball ([`support_action`]), where a
+    /// teammate with the ball can pass to them. Always possible. Absent
+    /// from older runs' configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub support: bool,
+    /// With `support`: the most ticks one `support` decision holds. The
+    /// robot then walks on to its spot without deciding again until it
+    /// arrives (within [`SUPPORT_ARRIVE`]), the ball comes within
+    /// [`SUPPORT_RELEASE_BALL`] of it, or this many ticks pass, and holds
+    /// at least `persist` ticks as any movement does. One choice of
+    /// `support` then puts a robot ahead of the ball, where a one-tick
+    /// choice moved it a few centimetres. 0 (and absent from older runs'
+    /// configurations): `support` holds `persist` ticks like any movement.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub support_hold: u32,
+    /// With `support`: roles. Only the team's `chasers` standing robots
+    /// nearest the ball ([`is_chaser`]) may `forward` or turn; the others
+    /// choose among `support`, `stay` and, with the ball in reach, `shoot`
+    /// and `pass`, so that the robots away from the ball stand where a pass
+    /// can reach them instead of crowding it. 0 (and absent from older
+    /// runs' configurations): no roles.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub chasers: u32,
+    /// With `chasers`: the robots that do not chase may not `stay` either
+    /// ([`SUPPORT_ONLY_BANNED`]), so they always walk to or hold their
+    /// support spot unless the ball is in reach. Absent from older runs'
+    /// configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub support_only: bool,
+    /// With `support`: where the support spot is ([`SupportSpot`]). Absent
+    /// from older runs' configurations: [`SupportSpot::Ahead`].
+    #[serde(default, skip_serializing_if = "SupportSpot::is_ahead")]
+    pub support_spot: SupportSpot,
+    /// The robots have an eighth action, `approach` (needs `support`): walk
+    /// round behind the ball onto its line to the opponent goal, then into
+    /// it ([`approach_action`]). Under `chasers`, the robots that do not
+    /// chase may not `approach` either. Absent from older runs'
+    /// configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub approach: bool,
+    /// With `approach`: no robot may `forward` or turn; the robots move by
+    /// `approach` and `support` only ([`APPROACH_ONLY_BANNED`]). Absent
+    /// from older runs' configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub approach_only: bool,
+    /// The own-goal guard ([`OwnGoalGuard`]): near its own goal a robot
+    /// facing that goal may not walk into the ball or kick it. Absent from
+    /// older runs' configurations: off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub own_goal_guard: Option<OwnGoalGuard>,
+}
+
+fn is_zero(v: &u32) -> bool {
+    *v == 0
+}
+
+/// Where a `support` walks to ([`support_spot`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SupportSpot {
+    /// [`SUPPORT_AHEAD`] ahead of the ball toward the opponent goal and
+    /// [`SUPPORT_SIDE`] to the side the robot is on.
+    #[default]
+    Ahead,
+    /// [`SUPPORT_AHEAD`] beyond the ball on the line from the teammate
+    /// nearest the ball (the one about to kick it) through the ball, and
+    /// [`SUPPORT_SIDE`] to the side of that line the robot is on: where the
+    /// kicker faces when it reaches the ball, whichever way that is.
+    Facing,
+}
+
+impl SupportSpot {
+    fn is_ahead(&self) -> bool {
+        *self == SupportSpot::Ahead
+    }
+}
+
+impl DecisionConfig {
+    /// The `team` presets' decisions: a movement holds 3 ticks, `shoot` is
+    /// masked while the ball is out of reach, the five protocol actions of
+    /// the paper and nothing more (each extra is switched on by a `train`
+    /// flag).
+    pub fn team() -> DecisionConfig {
+        DecisionConfig {
+            persist: 3,
+            mask_shoot: true,
+            pass: false,
+            support: false,
+            support_hold: 0,
+            chasers: 0,
+            support_only: false,
+            support_spot: SupportSpot::Ahead,
+            approach: false,
+            approach_only: false,
+            own_goal_guard: None,
+        }
+    }
+
+    /// How many actions the networks choose among: 5, 6 with `pass`, 7
+    /// with `pass` and `support`, 8 with `approach` too.
+    pub fn actions(&self) -> usize {
+        match (self.pass, self.support, self.approach) {
+            (_, true, true) => APPROACH + 1,
+            (_, true, false) => SUPPORT + 1,
+            (true, false, _) => PASS + 1,
+            (false, false, _) => ACTIONS,
+        }
+    }
+}
+
+/// The number of actions of a team in `decision` (`None`: the paper's five).
+pub fn action_count(decision: Option<DecisionConfig>) -> usize {
+    decision.map_or(ACTIONS, |d| d.actions())
+}
+
+/// The uniform number in [0, 1) a sampling robot uses at `tick`: a hash of
+/// the match seed, the robot's team and player and the tick, so it does not
+/// depend on how robots are batched or in which order they are asked.
+pub fn sample_uniform(match_seed: u64, team: usize, player: usize, tick: Tick) -> f32 {
+    let mut z = match_seed ^ 0x6A09_E667_F3BC_C909;
+    for v in [team as u64, player as u64, tick.get()] {
+        z = z.wrapping_add(v).wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+    }
+    (z >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// Inverse-CDF sampling from a probability row with a uniform `u` in [0, 1).
+pub fn sample(probs: &[f32], u: f32) -> usize {
+    let total: f32 = probs.iter().sum();
+    let mut acc = 0.0;
+    for (i, p) in probs.iter().enumerate() {
+        acc += p / total;
+        if u < acc {
+            return i;
+        }
+    }
+    probs.len() - 1
+}
+
+/// Index of the largest value; the first on ties.
+pub fn argmax(v: &[f32]) -> usize {
+    let mut best = 0;
+    for (i, x) in v.iter().enumerate() {
+        if *x > v[best] {
+            best = i;
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn argmax_takes_the_first_of_ties() {
+        assert_eq!(argmax(&[0.0, 3.0, 3.0, -1.0]), 1);
+    }
+
+    #[test]
+    fn sampling_follows_the_cumulative_distribution() {
+        let p = [0.1, 0.2, 0.3, 0.4, 0.0];
+        assert_eq!(sample(&p, 0.0), 0);
+        assert_eq!(sample(&p, 0.05), 0);
+        assert_eq!(sample(&p, 0.15), 1);
+        assert_eq!(sample(&p, 0.45), 2);
+        assert_eq!(sample(&p, 0.99), 3);
+        // Unnormalised rows are normalised first.
+        assert_eq!(sample(&[2.0, 2.0], 0.49), 0);
+        assert_eq!(sample(&[2.0, 2.0], 0.51), 1);
+    }
+
+    #[test]
+    fn draws_are_uniform_and_keyed_by_seed_team_player_and_tick() {
+        let mut sum = 0.0f64;
+        for t in 0..10_000 {
+            let u = sample_uniform(3, 0, 1, Tick::new(t));
+            assert!((0.0..1.0).contains(&u));
+            sum += f64::from(u);
+        }
+        assert!((sum / 10_000.0 - 0.5).abs() < 0.02);
+        let u = sample_uniform(3, 0, 1, Tick::new(5));
+        assert_ne!(u, sample_uniform(4, 0, 1, Tick::new(5)));
+        assert_ne!(u, sample_uniform(3, 1, 1, Tick::new(5)));
+        assert_ne!(u, sample_uniform(3, 0, 2, Tick::new(5)));
+        assert_ne!(u, sample_uniform(3, 0, 1, Tick::new(6)));
+    }
+}

@@ -1,0 +1,198 @@
+//! What the actions that are not protocol actions turn into: the
+//! `support` and `approach` steps, the support spot, and their tuning.
+
+use naosoccer_proto::{Action, Observation};
+use naosoccer_referee::rules::wrap_angle;
+
+use super::masks::nearest_standing_teammate;
+use super::{SupportSpot, APPROACH, SUPPORT};
+
+/// A support spot lies this far ahead of the ball, toward the opponent
+/// goal (m): the default of the reward's `support_ahead`.
+pub const SUPPORT_AHEAD: f32 = 1.5;
+/// ...and this far to the side of the ball the robot is on (m): the
+/// default of the reward's `support_side`. The spot is 1.8 m from the ball
+/// and 0.59 rad off the line toward the goal, inside the pass rule's
+/// 0.8-4 m and 0.8 rad for a kicker facing the goal.
+pub const SUPPORT_SIDE: f32 = 1.0;
+/// Within this distance of its spot (m) a supporting robot turns to face
+/// the ball instead of walking.
+pub const SUPPORT_ARRIVE: f32 = 0.3;
+/// A supporting robot walks when its spot is within this angle of its
+/// heading (rad) and turns toward it otherwise.
+pub const SUPPORT_WALK_CONE: f32 = 0.35;
+/// Arrived, it turns until the ball is within this angle of its heading (rad).
+pub const SUPPORT_FACE_CONE: f32 = 0.5;
+/// With [`DecisionConfig::support_hold`](super::DecisionConfig::support_hold),
+/// a held `support` also ends once the ball is this close to the robot (m),
+/// so a robot that a pass reaches decides at once.
+pub const SUPPORT_RELEASE_BALL: f32 = 0.6;
+
+/// `approach` walks straight into the ball once the robot stands within
+/// this angle (rad) of the line from the ball to the opponent goal, seen
+/// from the ball (within twice it when closer than [`APPROACH_NEAR`]); the
+/// scripted team's `align_tolerance`.
+pub const APPROACH_ALIGN: f32 = 0.5;
+/// See [`APPROACH_ALIGN`] (m).
+pub const APPROACH_NEAR: f32 = 0.25;
+/// Out of line, `approach` first walks to this far behind the ball on that
+/// line (m): the scripted team's `behind`.
+pub const APPROACH_BEHIND: f32 = 0.3;
+/// Walking into the ball, `approach` turns while the ball would pass more
+/// than this far (m) to the side of the robot's heading line...
+pub const APPROACH_LATERAL: f32 = 0.06;
+/// ...but never for an angle error below this (rad).
+pub const APPROACH_MIN_CONE: f32 = 0.12;
+
+/// The protocol action a team's action index `index` stands for in the
+/// state `obs`, on a pitch of half length and half width `half`: the index
+/// itself for the protocol's actions, the step toward the support spot
+/// (placed as `spot` says) for [`SUPPORT`], the step of [`approach_action`]
+/// for [`APPROACH`], `stay` for anything else.
+pub fn to_action(index: usize, obs: &Observation, half: [f32; 2], spot: SupportSpot) -> Action {
+    match index {
+        SUPPORT => support_action(obs, half, spot),
+        APPROACH => approach_action(obs, half),
+        _ => Action::from_index(index).unwrap_or(Action::Stay),
+    }
+}
+
+/// The `approach` action's step for the robot that received `obs`, on a
+/// pitch of half length and half width `half` (m), as the scripted team
+/// lines up: seen from the ball, when the robot stands within
+/// [`APPROACH_ALIGN`] of the line from the ball to the opponent goal's
+/// centre, it turns to the ball (while the ball would pass more than
+/// [`APPROACH_LATERAL`] to the side, or [`APPROACH_MIN_CONE`]) and walks
+/// into it, so it reaches the ball facing the goal and walks on with it.
+/// Otherwise it walks round to [`APPROACH_BEHIND`] behind the ball on that
+/// line, going wide of the ball when the ball is in the way. Stateless, so
+/// it is the same step in training, in process and over the socket.
+pub fn approach_action(obs: &Observation, half: [f32; 2]) -> Action {
+    let me = obs.me();
+    if me.fallen {
+        return Action::Stay;
+    }
+    let ball = [obs.ball.x, obs.ball.y];
+    let to_goal = [half[0] - ball[0], -ball[1]];
+    let len = to_goal[0].hypot(to_goal[1]);
+    let u = if len > 1e-6 {
+        [to_goal[0] / len, to_goal[1] / len]
+    } else {
+        [1.0, 0.0]
+    };
+    let to_ball = [ball[0] - me.x, ball[1] - me.y];
+    let d = to_ball[0].hypot(to_ball[1]);
+    let ball_dir = to_ball[1].atan2(to_ball[0]);
+    let off = wrap_angle(ball_dir - u[1].atan2(u[0])).abs();
+    let (target, cone) =
+        if off < APPROACH_ALIGN || (d < APPROACH_NEAR && off < 2.0 * APPROACH_ALIGN) {
+            let cone = (APPROACH_LATERAL / d.max(1e-3))
+                .atan()
+                .clamp(APPROACH_MIN_CONE, SUPPORT_WALK_CONE);
+            (ball, cone)
+        } else {
+            let rel = [me.x - ball[0], me.y - ball[1]];
+            let along = rel[0] * u[0] + rel[1] * u[1];
+            let across = u[0] * rel[1] - u[1] * rel[0];
+            let target = if along > -0.15 && across.abs() < 0.45 {
+                // The ball is in the way: go wide of it first, to a point
+                // as far behind the ball as the line-up point. Walking there
+                // always leaves this region; a point on its edge (0.15 m
+                // behind, as the scripted team goes wide) could leave the
+                // robot there, turning left and right for ever as it
+                // swayed across the edge.
+                let side = if across >= 0.0 { 1.0 } else { -1.0 };
+                [
+                    ball[0] - u[1] * side * 0.5 - u[0] * APPROACH_BEHIND,
+                    ball[1] + u[0] * side * 0.5 - u[1] * APPROACH_BEHIND,
+                ]
+            } else {
+                [
+                    ball[0] - u[0] * APPROACH_BEHIND,
+                    ball[1] - u[1] * APPROACH_BEHIND,
+                ]
+            };
+            (target, SUPPORT_WALK_CONE)
+        };
+    let err = wrap_angle((target[1] - me.y).atan2(target[0] - me.x) - me.heading);
+    if err.abs() > cone {
+        if err > 0.0 {
+            Action::TurnLeft
+        } else {
+            Action::TurnRight
+        }
+    } else {
+        Action::Forward
+    }
+}
+
+/// The `support` action's step for the robot that received `obs`, on a
+/// pitch of half length and half width `half` (m): its support spot
+/// ([`support_spot`], placed as `spot` says) is by default
+/// [`SUPPORT_AHEAD`] ahead of the ball (toward the opponent goal, +x in the
+/// observation's frame) and [`SUPPORT_SIDE`] to the side of the ball the
+/// robot stands on, kept 0.3 m inside the lines (the reward's `support`
+/// spot). Away from the spot it turns toward it until the spot is within
+/// [`SUPPORT_WALK_CONE`] and walks; arrived, it turns to face the ball.
+/// Stateless, so it is the same step in training, in process and over the
+/// socket.
+pub fn support_action(obs: &Observation, half: [f32; 2], spot: SupportSpot) -> Action {
+    let me = obs.me();
+    if me.fallen {
+        return Action::Stay;
+    }
+    let (bx, by) = (obs.ball.x, obs.ball.y);
+    let spot = support_spot(obs, half, spot);
+    let (dx, dy) = (spot[0] - me.x, spot[1] - me.y);
+    let (target, cone, arrived) = if dx.hypot(dy) > SUPPORT_ARRIVE {
+        ([dx, dy], SUPPORT_WALK_CONE, false)
+    } else {
+        ([bx - me.x, by - me.y], SUPPORT_FACE_CONE, true)
+    };
+    let err = wrap_angle(target[1].atan2(target[0]) - me.heading);
+    if err.abs() > cone {
+        if err > 0.0 {
+            Action::TurnLeft
+        } else {
+            Action::TurnRight
+        }
+    } else if arrived {
+        Action::Stay
+    } else {
+        Action::Forward
+    }
+}
+
+/// The support spot of the robot that received `obs` (observation frame,
+/// m), kept 0.3 m inside the lines of a pitch of half length and half
+/// width `half`. [`SupportSpot::Ahead`]: [`SUPPORT_AHEAD`] ahead of the
+/// ball (+x) and [`SUPPORT_SIDE`] to the side of it the robot stands on.
+/// [`SupportSpot::Facing`]: [`SUPPORT_AHEAD`] beyond the ball on the line
+/// from the standing teammate nearest the ball (on a tie the lower player
+/// number; not the robot itself) through the ball, and [`SUPPORT_SIDE`] to
+/// the side of that line the robot stands on; with no such teammate, or
+/// one on the ball's centre, as `Ahead`.
+pub fn support_spot(obs: &Observation, half: [f32; 2], spot: SupportSpot) -> [f32; 2] {
+    let me = obs.me();
+    let (bx, by) = (obs.ball.x, obs.ball.y);
+    let (lx, ly) = ((half[0] - 0.3).max(0.0), (half[1] - 0.3).max(0.0));
+    let mut dir = [1.0, 0.0];
+    if spot == SupportSpot::Facing {
+        if let Some((len, j)) = nearest_standing_teammate(obs) {
+            if len > 1e-3 {
+                let k = &obs.own[j];
+                dir = [(bx - k.x) / len, (by - k.y) / len];
+            }
+        }
+    }
+    // Left of the line (looking along `dir`) is +1.
+    let side = if dir[0] * (me.y - by) - dir[1] * (me.x - bx) >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    };
+    [
+        (bx + dir[0] * SUPPORT_AHEAD - dir[1] * side * SUPPORT_SIDE).clamp(-lx, lx),
+        (by + dir[1] * SUPPORT_AHEAD + dir[0] * side * SUPPORT_SIDE).clamp(-ly, ly),
+    ]
+}
