@@ -15,6 +15,8 @@ use crate::{
     BallState, Command, Kick, RobotModel, RobotState, SimConfig, SimError, Snapshot, ROBOTS,
 };
 
+mod stage;
+
 /// A stumbling robot is thrown over only while it tips slower than this,
 /// rad/s (a fall from upright under gravity alone reaches about 5 rad/s by
 /// the time it lies).
@@ -583,6 +585,9 @@ impl Sim {
     }
 
     fn put_robot(&mut self, robot: usize, (x, y): (f32, f32), heading: f32) {
+        if !self.in_play(robot) {
+            return;
+        }
         let pose = standing_pose(self.torso_height, x, y, heading);
         let body = &mut self.world.bodies[self.robots[robot]];
         body.set_position(pose, true);
