@@ -1,4 +1,5 @@
 //! One module per subcommand (or family of subcommands).
+pub mod academy;
 pub mod bench;
 pub mod client;
 pub mod eval;
