@@ -61,7 +61,9 @@ pub struct MatchArgs {
     /// Start from this scenario (docs/SCENARIOS.md) instead of the
     /// kick-off, drawn from --seed, and stop at its first end condition
     /// that holds or when its time is up; the output adds how it ended.
-    #[arg(long, value_name = "FILE", conflicts_with = "record")]
+    /// With --record the recording stores the scenario and ends with it;
+    /// `naosoccer replay` re-creates the start.
+    #[arg(long, value_name = "FILE")]
     scenario: Option<PathBuf>,
     /// With --scenario: the colour the team under test (the file's own
     /// team, attacking +x in the file) plays.
@@ -161,7 +163,11 @@ pub fn run(mut args: MatchArgs) -> anyhow::Result<()> {
     // From here on Ctrl-C ends the match after the current tick and keeps it.
     naosoccer::interrupt::watch()?;
     let mut recording = match &args.record {
-        Some(path) => Some(MatchRecording::start(path, &cfg, &args)?),
+        Some(path) => Some(MatchRecording::start(
+            path,
+            &args,
+            &new_match(&cfg, args.seed)?,
+        )?),
         None => None,
     };
     let mut live = match &args.live {
@@ -186,7 +192,8 @@ pub fn run(mut args: MatchArgs) -> anyhow::Result<()> {
             cut_short = Some(m.total_ticks());
         }
         if let Some(r) = &mut recording {
-            r.tick(m, actions, events, stop);
+            // A scenario's ending is the recording's last tick too.
+            r.tick(m, actions, events, stop || ending.is_some());
         }
         if let Some(l) = &mut live {
             l.tick(m, events);
@@ -328,10 +335,10 @@ struct RecordingReport {
 }
 
 impl MatchRecording {
-    fn start(path: &std::path::Path, cfg: &MatchConfig, args: &MatchArgs) -> anyhow::Result<Self> {
-        let m = Match::new(cfg, args.seed)?;
-        let meta = MatchMeta::of(&m, args.blue(), args.red(), "match");
-        let rec = Recorder::create(path, &meta, &m, RecorderOptions::default())
+    /// `m`: the match about to be played, at its start.
+    fn start(path: &std::path::Path, args: &MatchArgs, m: &Match) -> anyhow::Result<Self> {
+        let meta = MatchMeta::of(m, args.blue(), args.red(), "match");
+        let rec = Recorder::create(path, &meta, m, RecorderOptions::default())
             .with_context(|| format!("creating {}", path.display()))?;
         Ok(MatchRecording {
             path: path.to_owned(),

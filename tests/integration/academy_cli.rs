@@ -331,3 +331,73 @@ fn academy_the_documented_example_starts_where_the_page_says() {
         }
     }
 }
+
+/// A scenario's match recorded with `match --record` stores the scenario:
+/// the recording's first state is the start the file says (world frame,
+/// the own team red: turned half round), and `replay` re-creates it and
+/// every tick after, bit for bit.
+#[test]
+fn academy_a_recorded_scenario_replays_identically() {
+    let scenario = common::scratch("academy-record", "kick-off.toml");
+    std::fs::write(
+        &scenario,
+        "duration = 8.0\n[ball]\nx = 0.4\ny = [-0.2, 0.2]\nvx = -0.5\n\
+         [[robot]]\nside = \"own\"\nplayer = 1\nx = 0.0\ny = 0.3\nheading = \"ball\"\n\
+         [[robot]]\nside = \"opponent\"\nplayer = 2\nx = 1.5\ny = -1.0\nfallen = true\n\
+         [state]\nphase = \"kick_off\"\ntaken_by = \"own\"\nhalf = 2\ntime_left = 100\n",
+    )
+    .unwrap();
+    let file = common::scratch("academy-record", "kick-off.mcap");
+    let (s, f) = (scenario.to_str().unwrap(), file.to_str().unwrap());
+    let v = json_of(&[
+        "match",
+        "--scenario",
+        s,
+        "--own",
+        "red",
+        "--blue",
+        "scripted",
+        "--red",
+        "scripted",
+        "--seed",
+        "9",
+        "--record",
+        f,
+        "--json",
+    ]);
+    assert_eq!(v["scenario"]["ending"], "time_up", "{v}");
+    let rec = naosoccer_record::Recording::read_file(&file).unwrap();
+    let meta = rec
+        .meta
+        .scenario
+        .as_ref()
+        .expect("the scenario is recorded");
+    assert_eq!(meta.own, Team::Red);
+    let first = &rec.states[0];
+    assert_eq!(first.tick.get(), 6000 - 1000);
+    let near = |a: f32, b: f32| (a - b).abs() <= 1e-3;
+    assert!(near(first.ball.x, -0.4) && first.ball.y.abs() <= 0.2 + 1e-3);
+    assert!(near(first.ball.vx, 0.5), "{:?}", first.ball);
+    let me = &first.robots[RobotId::new(Team::Red, 1).unwrap().index()];
+    assert!(near(me.x, 0.0) && near(me.y, -0.3), "{me:?}");
+    let lying = &first.robots[RobotId::new(Team::Blue, 2).unwrap().index()];
+    assert!(
+        near(lying.x, -1.5) && near(lying.y, 1.0) && lying.fallen,
+        "{lying:?}"
+    );
+    assert_eq!(rec.states.last().unwrap().tick.get(), 5000 + 80);
+    let out = naosoccer(&["replay", f]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("identical (80 ticks)"),
+        "{}",
+        text(&out)
+    );
+    let out = naosoccer(&["replay", f, "--summary"]);
+    assert!(
+        String::from_utf8_lossy(&out.stdout)
+            .contains("started from scenario kick-off (own team red)"),
+        "{}",
+        text(&out)
+    );
+}

@@ -55,6 +55,9 @@ pub struct Match {
     /// Robots out of play (a scenario's absent robots): the sim holds them
     /// off the pitch and their actions are ignored.
     off: [bool; ROBOTS],
+    /// The scenario the match started from: its name, its file's text and
+    /// the own team's colour (what a recording needs to re-create the start).
+    scenario: Option<(std::sync::Arc<str>, std::sync::Arc<str>, Team)>,
     controller: Option<RobotId>,
     /// Goals, indexed by `Team::index`.
     score: Score,
@@ -108,6 +111,7 @@ impl Match {
             finished: false,
             announce: None,
             off: [false; ROBOTS],
+            scenario: None,
             controller: None,
             score: Score::default(),
             stats: MatchStats::default(),

@@ -27,6 +27,11 @@ impl Match {
         scenario.check(cfg)?;
         let start = scenario.draw(cfg, seed, own);
         m.apply_start(&start);
+        m.scenario = Some((
+            scenario.name.as_str().into(),
+            scenario.source.as_str().into(),
+            own,
+        ));
         Ok(m)
     }
 
@@ -92,6 +97,16 @@ impl Match {
         }
         let down = self.fall.down();
         self.controller = self.possession.controller(self.sim.snapshot(), &down);
+    }
+
+    /// The scenario this match started from: its name, its file's text
+    /// and the colour of its own team. `Scenario::from_toml` of the text
+    /// and [`Match::with_scenario`] with the config, seed and colour
+    /// re-create the start exactly.
+    pub fn scenario(&self) -> Option<(&str, &str, Team)> {
+        self.scenario
+            .as_ref()
+            .map(|(name, text, own)| (&**name, &**text, *own))
     }
 
     /// Whether `robot` is out of play (absent from the scenario the match
