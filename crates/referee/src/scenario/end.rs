@@ -18,7 +18,7 @@ pub enum EndKind {
     PossessionLost,
     /// An own robot controls the ball.
     PossessionWon,
-    /// The duration is over, or the half or the match ended.
+    /// The duration is over, the half ended within it, or the match ended.
     TimeUp,
     /// The ball's centre is inside the rectangle (own team's frame, ends
     /// included).
@@ -134,9 +134,10 @@ impl Judge {
     /// the file's outcome for it, a failure if it names none.
     pub fn check(&self, m: &Match, events: &[Event]) -> Option<Ending> {
         let ticks = m.tick().saturating_since(self.start);
-        let time_up = m.is_finished()
-            || self.limit.is_some_and(|l| ticks >= l)
-            || events.iter().any(|e| matches!(e, Event::HalfTime { .. }));
+        // Half time puts everybody back in the kick-off places: a play with
+        // a duration ends there; one without plays on to the match's end.
+        let half_time = events.iter().any(|e| matches!(e, Event::HalfTime { .. }));
+        let time_up = m.is_finished() || self.limit.is_some_and(|l| ticks >= l || half_time);
         let holds = |kind: &EndKind| match *kind {
             EndKind::GoalFor => goal(events, self.own),
             EndKind::GoalAgainst => goal(events, self.own.other()),

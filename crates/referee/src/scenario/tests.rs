@@ -274,3 +274,25 @@ fn the_judge_sees_a_goal_and_time_up() {
     }
     assert_eq!(ticks, 25);
 }
+
+#[test]
+fn half_time_ends_a_play_with_a_duration_and_not_one_without() {
+    let c = cfg();
+    let play = |text: &str, ticks: usize| {
+        let s = Scenario::from_toml(text, None).unwrap();
+        let mut m = Match::with_scenario(&c, 4, &s, Team::Blue).unwrap();
+        let judge = s.judge(&c, Team::Blue, m.tick());
+        for _ in 0..ticks {
+            let events = m.step(&[Action::Stay; ROBOTS]).to_vec();
+            if let Some(e) = judge.check(&m, &events) {
+                return Some((e, m.tick().get()));
+            }
+        }
+        None
+    };
+    let (e, tick) = play("duration = 60\n[state]\nelapsed = 299", 20).unwrap();
+    assert_eq!((e.kind, e.ticks, tick), (EndKind::TimeUp, 10, 3000));
+    assert_eq!(play("[state]\nelapsed = 299", 20), None);
+    let (e, tick) = play("[state]\nhalf = 2\ntime_left = 1", 20).unwrap();
+    assert_eq!((e.kind, e.success, tick), (EndKind::TimeUp, false, 6000));
+}
