@@ -40,6 +40,9 @@ enum Command {
     Train(cmd::not_built::NotBuilt),
     /// Play many matches between two teams; Table I with 95% CIs.
     Eval(cmd::eval::EvalArgs),
+    /// Play every drill of the academy (scenarios with end conditions),
+    /// many starts each: success rates with 95% intervals.
+    Academy(cmd::academy::AcademyArgs),
     /// Play a round robin between teams; a Bradley–Terry rating per team
     /// with 95% intervals, W/D/L and goals by phase.
     League(cmd::league::LeagueArgs),
@@ -61,7 +64,7 @@ fn main() -> std::process::ExitCode {
     // when their output pipe closes (`naosoccer eval | head`).
     let pipes_only = match &cli.command {
         Command::Match(a) => a.live.is_none(),
-        Command::Eval(_) | Command::League(_) | Command::Render(_) => true,
+        Command::Eval(_) | Command::League(_) | Command::Academy(_) | Command::Render(_) => true,
         Command::Replay(a) => a.live.is_none(),
         _ => false,
     };
@@ -78,6 +81,7 @@ fn main() -> std::process::ExitCode {
         Command::Bench(b) => cmd::bench::run(b),
         Command::Eval(args) => cmd::eval::eval_cmd(args),
         Command::League(args) => cmd::league::league_cmd(args),
+        Command::Academy(args) => cmd::academy::academy_cmd(args),
         #[cfg(feature = "train")]
         Command::Train(args) => cmd::learn::train_cmd(*args),
         #[cfg(feature = "train")]

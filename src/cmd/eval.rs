@@ -70,9 +70,10 @@ pub struct EvalArgs {
     /// ppo-greedy:DIR, dqn:DIR or dqn-epsilon:DIR.
     #[arg(long, required_unless_present = "merge")]
     blue: Option<String>,
-    /// Second team: as --blue.
-    #[arg(long, default_value = "scripted")]
-    red: String,
+    /// Second team: as --blue [default: scripted; with --scenario, the
+    /// scenario's `opponent`].
+    #[arg(long)]
+    red: Option<String>,
     /// Matches to play.
     #[arg(long, default_value_t = 50)]
     matches: usize,
@@ -105,6 +106,19 @@ pub struct EvalArgs {
     /// One JSON object instead of the table.
     #[arg(long)]
     json: bool,
+    /// Play a scenario (docs/SCENARIOS.md) instead of whole matches: start
+    /// i has match i's seed, the --blue team is the team under test (the
+    /// file's own team), playing blue in the even starts and red in the odd
+    /// ones, and --red the opponents. Prints the success rate with its
+    /// Wilson 95% interval, the mean time to a success and how many starts
+    /// each end condition ended: the row `academy` prints for a drill
+    /// (with --json, academy's object with one drill).
+    #[arg(
+        long,
+        value_name = "FILE",
+        conflicts_with_all = ["first_match", "both_sides", "legacy_seeds", "minutes"]
+    )]
+    scenario: Option<PathBuf>,
     /// Play nothing: merge these --json outputs of blocks of one evaluation
     /// and print what one run over all their matches prints.
     #[arg(
@@ -113,13 +127,16 @@ pub struct EvalArgs {
         value_name = "FILE.json",
         conflicts_with_all = [
             "blue", "red", "matches", "first_match", "seed", "both_sides",
-            "legacy_seeds", "config", "minutes", "threads",
+            "legacy_seeds", "config", "minutes", "threads", "scenario",
         ]
     )]
     merge: Vec<PathBuf>,
 }
 
 pub fn eval_cmd(a: EvalArgs) -> anyhow::Result<()> {
+    if let Some(path) = &a.scenario {
+        return scenario(&a, path);
+    }
     let (report, interrupted) = if a.merge.is_empty() {
         play(&a)?
     } else {
@@ -166,7 +183,8 @@ fn play(a: &EvalArgs) -> anyhow::Result<(Option<EvalReport>, bool)> {
     let blue_spec = a.blue.clone().context("--blue is required")?;
     let cfg = match_config(a.config.as_ref(), a.minutes)?;
     let mut blue = Side::parse(&blue_spec)?;
-    let mut red = Side::parse(&a.red)?;
+    let red_spec = a.red.clone().unwrap_or_else(|| "scripted".to_owned());
+    let mut red = Side::parse(&red_spec)?;
     let plan = EvalPlan {
         matches: a.matches,
         first_match: a.first_match,
@@ -211,7 +229,7 @@ fn play(a: &EvalArgs) -> anyhow::Result<(Option<EvalReport>, bool)> {
         matches: results.len(),
         ..plan
     };
-    let report = EvalReport::new([blue_spec, a.red.clone()], played, &cfg, &results, secs);
+    let report = EvalReport::new([blue_spec, red_spec], played, &cfg, &results, secs);
     Ok((Some(report), stopped))
 }
 
@@ -227,4 +245,38 @@ fn merge(files: &[PathBuf]) -> anyhow::Result<EvalReport> {
         parts.push((label.clone(), EvalReport::from_json(&label, &value)?));
     }
     Ok(EvalReport::merge(&parts)?)
+}
+
+/// `--scenario`: the starts of one drill, as `academy` plays them.
+fn scenario(a: &EvalArgs, path: &std::path::Path) -> anyhow::Result<()> {
+    use naosoccer_policy::academy::{self, DrillPlan};
+    anyhow::ensure!(a.matches > 0, "--matches must be at least 1");
+    let blue = a.blue.clone().context("--blue is required")?;
+    let cfg = match_config(a.config.as_ref(), None)?;
+    let s = naosoccer_referee::Scenario::from_file(path)?;
+    s.check(&cfg)
+        .with_context(|| format!("{} against the match configuration", path.display()))?;
+    let plan = DrillPlan {
+        starts: a.matches,
+        seed: a.seed,
+    };
+    interrupt::watch()?;
+    let start = Instant::now();
+    let Some(row) = super::academy::play(&cfg, &s, &blue, a.red.as_deref(), &plan, a.threads)?
+    else {
+        return Err(
+            interrupt::Interrupted::new("eval stopped before the starts were played").into(),
+        );
+    };
+    let wall = start.elapsed().as_secs_f64();
+    let rows = [row];
+    if a.json {
+        println!(
+            "{}",
+            academy::to_json(&blue, a.matches, a.seed, &rows, wall)
+        );
+    } else {
+        print!("{}", academy::format_table(&blue, a.matches, a.seed, &rows));
+    }
+    Ok(())
 }

@@ -1,4 +1,5 @@
 //! One module per subcommand (or family of subcommands).
+pub mod academy;
 pub mod bench;
 #[cfg(feature = "train")]
 pub mod bench_learn;

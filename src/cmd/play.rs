@@ -13,7 +13,7 @@ use naosoccer_proto::{Action, Event, RobotId, Team, TeamStats, Tick, ROBOTS};
 
 use super::team::TeamSpec;
 use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RecordingSummary};
-use naosoccer_referee::{Match, MatchConfig};
+use naosoccer_referee::{Ending, Match, MatchConfig, Scenario};
 use naosoccer_sim::{BareWorld, RobotModel};
 
 #[derive(Args, Debug)]
@@ -50,12 +50,26 @@ pub struct MatchArgs {
     /// rule-based team), a scripted variant (scripted:KEY=VAL,... or
     /// scripted:FILE.toml, e.g. scripted:assets/scripted/press.toml), random,
     /// idle, or a trained team (ppo:DIR, dqn:DIR,
-    /// e.g. ppo:assets/policies/ppo-paper-seed1; docs/LEARNING.md).
-    #[arg(long, default_value = "scripted", value_name = "POLICY")]
-    blue: String,
+    /// e.g. ppo:assets/policies/ppo-paper-seed1; docs/LEARNING.md)
+    /// [default: scripted; with --scenario, the opponents' default is the
+    /// scenario's `opponent`].
+    #[arg(long, value_name = "POLICY")]
+    blue: Option<String>,
     /// Red's policy: as --blue.
-    #[arg(long, default_value = "scripted", value_name = "POLICY")]
-    red: String,
+    #[arg(long, value_name = "POLICY")]
+    red: Option<String>,
+    /// Start from this scenario (docs/SCENARIOS.md) instead of the
+    /// kick-off, drawn from --seed, and stop at its first end condition
+    /// that holds or when its time is up; the output adds how it ended.
+    /// With --record the recording stores the scenario and ends with it;
+    /// `naosoccer replay` re-creates the start.
+    #[arg(long, value_name = "FILE")]
+    scenario: Option<PathBuf>,
+    /// With --scenario: the colour the team under test (the file's own
+    /// team, attacking +x in the file) plays.
+    #[arg(long, value_name = "COLOUR", default_value = "blue",
+          value_parser = ["blue", "red"], requires = "scenario")]
+    own: String,
     /// Match length in minutes of game time (overrides the config).
     #[arg(long, value_name = "M")]
     minutes: Option<f32>,
@@ -83,6 +97,17 @@ pub struct MatchArgs {
     wait_viewer: bool,
 }
 
+impl MatchArgs {
+    /// The policies as resolved by `run` (defaults filled in).
+    fn blue(&self) -> &str {
+        self.blue.as_deref().unwrap_or("scripted")
+    }
+
+    fn red(&self) -> &str {
+        self.red.as_deref().unwrap_or("scripted")
+    }
+}
+
 fn load_config(path: Option<&PathBuf>, minutes: Option<f32>) -> anyhow::Result<MatchConfig> {
     let mut cfg = match path {
         Some(p) => MatchConfig::from_file(p)?,
@@ -95,10 +120,38 @@ fn load_config(path: Option<&PathBuf>, minutes: Option<f32>) -> anyhow::Result<M
     Ok(cfg)
 }
 
-pub fn run(args: MatchArgs) -> anyhow::Result<()> {
+pub fn run(mut args: MatchArgs) -> anyhow::Result<()> {
     let cfg = load_config(args.config.as_ref(), args.minutes)?;
-    let blue = TeamSpec::parse(&args.blue, "--blue")?;
-    let red = TeamSpec::parse(&args.red, "--red")?;
+    let own = if args.own == "red" {
+        Team::Red
+    } else {
+        Team::Blue
+    };
+    let scenario = match &args.scenario {
+        Some(path) => {
+            let s = Scenario::from_file(path)?;
+            s.check(&cfg)
+                .with_context(|| format!("{} against the match configuration", path.display()))?;
+            Some(s)
+        }
+        None => None,
+    };
+    // The opponents of a scenario play its `opponent` unless named here.
+    let default_of = |team: Team| match &scenario {
+        Some(s) if team != own => s.opponent.clone(),
+        _ => "scripted".to_owned(),
+    };
+    args.blue = Some(args.blue.take().unwrap_or_else(|| default_of(Team::Blue)));
+    args.red = Some(args.red.take().unwrap_or_else(|| default_of(Team::Red)));
+    let blue = TeamSpec::parse(args.blue(), "--blue")?;
+    let red = TeamSpec::parse(args.red(), "--red")?;
+    let new_match = |cfg: &MatchConfig, seed: u64| match &scenario {
+        Some(s) => Match::with_scenario(cfg, seed, s, own),
+        None => Match::new(cfg, seed),
+    };
+    let start = new_match(&cfg, args.seed)?;
+    let judge = scenario.as_ref().map(|s| s.judge(&cfg, own, start.tick()));
+    let mut ending: Option<Ending> = None;
     let policies = RobotId::all()
         .map(|robot| match robot.team() {
             Team::Blue => blue.build(args.seed, robot),
@@ -110,53 +163,62 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
     // From here on Ctrl-C ends the match after the current tick and keeps it.
     naosoccer::interrupt::watch()?;
     let mut recording = match &args.record {
-        Some(path) => Some(MatchRecording::start(path, &cfg, &args)?),
+        Some(path) => Some(MatchRecording::start(
+            path,
+            &args,
+            &new_match(&cfg, args.seed)?,
+        )?),
         None => None,
     };
     let mut live = match &args.live {
-        Some(addr) => Some(LiveMatch::start(addr, &cfg, &args)?),
+        Some(addr) => Some(LiveMatch::start(
+            addr,
+            &cfg,
+            &args,
+            new_match(&cfg, args.seed)?,
+        )?),
         None => None,
     };
     // Ctrl-C before the end: the match's length in ticks, for the report.
     let mut cut_short: Option<u64> = None;
-    let outcome = runner::run_until(
-        Match::new(&cfg, args.seed)?,
-        policies,
-        |m, actions, events| {
-            // Ctrl-C: this tick is the last; the recording is finished with
-            // it (its final statistics say the match was not completed).
-            let stop = naosoccer::interrupt::interrupted() && !m.is_finished();
-            if stop {
-                cut_short = Some(m.total_ticks());
+    let outcome = runner::run_until(start, policies, |m, actions, events| {
+        if let Some(j) = &judge {
+            ending = j.check(m, events);
+        }
+        // Ctrl-C: this tick is the last; the recording is finished with
+        // it (its final statistics say the match was not completed).
+        let stop = naosoccer::interrupt::interrupted() && !m.is_finished();
+        if stop {
+            cut_short = Some(m.total_ticks());
+        }
+        if let Some(r) = &mut recording {
+            // A scenario's ending is the recording's last tick too.
+            r.tick(m, actions, events, stop || ending.is_some());
+        }
+        if let Some(l) = &mut live {
+            l.tick(m, events);
+        }
+        // About once a game minute; enough to see it move, cheap to print.
+        if show_progress && (m.tick() - last_shown >= 600 || m.is_finished()) {
+            last_shown = m.tick();
+            let naosoccer_proto::PerTeam { blue: b, red: r } = m.score();
+            let mut err = std::io::stderr().lock();
+            let _ = write!(
+                err,
+                "\r{:>5.1}/{:.1} min  blue {b} - {r} red ",
+                m.sim_seconds() / 60.0,
+                m.total_ticks() as f64 / f64::from(cfg.control_hz) / 60.0
+            );
+            if m.is_finished() {
+                let _ = writeln!(err);
             }
-            if let Some(r) = &mut recording {
-                r.tick(m, actions, events, stop);
-            }
-            if let Some(l) = &mut live {
-                l.tick(m, events);
-            }
-            // About once a game minute; enough to see it move, cheap to print.
-            if show_progress && (m.tick() - last_shown >= 600 || m.is_finished()) {
-                last_shown = m.tick();
-                let naosoccer_proto::PerTeam { blue: b, red: r } = m.score();
-                let mut err = std::io::stderr().lock();
-                let _ = write!(
-                    err,
-                    "\r{:>5.1}/{:.1} min  blue {b} - {r} red ",
-                    m.sim_seconds() / 60.0,
-                    m.total_ticks() as f64 / f64::from(cfg.control_hz) / 60.0
-                );
-                if m.is_finished() {
-                    let _ = writeln!(err);
-                }
-            }
-            if stop {
-                std::ops::ControlFlow::Break(())
-            } else {
-                std::ops::ControlFlow::Continue(())
-            }
-        },
-    );
+        }
+        if stop || ending.is_some() {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    });
 
     if let Some(l) = live {
         l.server.finish(naosoccer::live::LINGER);
@@ -165,14 +227,41 @@ pub fn run(args: MatchArgs) -> anyhow::Result<()> {
         Some(r) => Some(r.report()?),
         None => None,
     };
+    let ended = scenario.as_ref().zip(ending).map(|(s, e)| {
+        serde_json::json!({
+            "name": s.name,
+            "own": own.to_string(),
+            "ending": e.kind.name(),
+            "success": e.success,
+            "ticks": e.ticks,
+            "seconds": e.ticks as f64 / f64::from(cfg.control_hz),
+        })
+    });
     if args.json {
         let mut json = outcome.to_json();
+        if let Some(e) = &ended {
+            json["scenario"] = e.clone();
+        }
         if let Some(r) = &recorded {
             json["recording"] = serde_json::to_value(r)?;
         }
         println!("{json}");
     } else {
         print_table(&args, &outcome);
+        if let Some(e) = &ended {
+            println!(
+                "scenario {} (own team {}): {} after {:.1} s, a {}",
+                e["name"].as_str().unwrap_or_default(),
+                e["own"].as_str().unwrap_or_default(),
+                e["ending"].as_str().unwrap_or_default(),
+                e["seconds"].as_f64().unwrap_or_default(),
+                if e["success"] == true {
+                    "success"
+                } else {
+                    "failure"
+                }
+            );
+        }
         if let Some(r) = &recorded {
             println!("recorded to {} ({} bytes)", r.path.display(), r.bytes);
         }
@@ -200,15 +289,14 @@ struct LiveMatch {
 }
 
 impl LiveMatch {
-    fn start(addr: &str, cfg: &MatchConfig, args: &MatchArgs) -> anyhow::Result<Self> {
+    fn start(addr: &str, cfg: &MatchConfig, args: &MatchArgs, m: Match) -> anyhow::Result<Self> {
         anyhow::ensure!(
             args.speed > 0.0 && args.speed.is_finite(),
             "--speed must be a positive number"
         );
         let server = LiveServer::start(addr)?;
         let mut stream = server.stream(1)?;
-        // The same seed and config give the same kick-off as the runner's.
-        let m = Match::new(cfg, args.seed)?;
+        // The same seed, config and scenario give the runner's start.
         stream.begin(&m);
         if args.wait_viewer && !server.wait_for_viewer(Duration::from_secs(600)) {
             anyhow::bail!("no viewer subscribed within 10 minutes");
@@ -247,10 +335,10 @@ struct RecordingReport {
 }
 
 impl MatchRecording {
-    fn start(path: &std::path::Path, cfg: &MatchConfig, args: &MatchArgs) -> anyhow::Result<Self> {
-        let m = Match::new(cfg, args.seed)?;
-        let meta = MatchMeta::of(&m, &args.blue, &args.red, "match");
-        let rec = Recorder::create(path, &meta, &m, RecorderOptions::default())
+    /// `m`: the match about to be played, at its start.
+    fn start(path: &std::path::Path, args: &MatchArgs, m: &Match) -> anyhow::Result<Self> {
+        let meta = MatchMeta::of(m, args.blue(), args.red(), "match");
+        let rec = Recorder::create(path, &meta, m, RecorderOptions::default())
             .with_context(|| format!("creating {}", path.display()))?;
         Ok(MatchRecording {
             path: path.to_owned(),
@@ -299,7 +387,9 @@ impl MatchRecording {
 fn print_table(args: &MatchArgs, o: &MatchOutcome) {
     println!(
         "naosoccer match: seed {}, {} (blue) vs {} (red)",
-        o.seed, args.blue, args.red
+        o.seed,
+        args.blue(),
+        args.red()
     );
     println!("final score: blue {} - {} red", o.score.blue, o.score.red);
     println!();

@@ -194,6 +194,9 @@ fn print_summary(rec: &Recording) {
         "seed {}, blue: {}, red: {}, {} ticks planned at {} Hz",
         m.seed, m.blue, m.red, m.total_ticks, m.control_hz
     );
+    if let Some(s) = &m.scenario {
+        println!("started from scenario {} (own team {})", s.name, s.own);
+    }
     match &rec.stats {
         Some(f) => {
             println!(

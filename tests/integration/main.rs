@@ -9,6 +9,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod academy_cli;
 mod eval_blocks;
 mod interrupt_cli;
 mod league_cli;

@@ -13,11 +13,14 @@
 //!   ([`load_policy`]), and as a batch player of many matches at once.
 //! - [`eval`]: many matches between two teams; Table I with 95% CIs.
 //! - [`league`]: a round robin of evaluations and a Bradley–Terry rating.
+//! - [`academy`]: drills (scenarios with end conditions), many starts each,
+//!   and their success rates.
 //!
 //! crates/learn (tch) trains the networks and depends on this crate; this
 //! crate never depends on it, so every command that only plays links no
 //! libtorch.
 
+pub mod academy;
 pub mod actions;
 pub mod bots;
 mod error;

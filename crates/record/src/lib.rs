@@ -24,8 +24,8 @@ mod replay;
 mod writer;
 
 pub use messages::{
-    BallRecord, FinalRecord, MatchMeta, RobotRecord, ScoreRecord, StateRecord, TickActions,
-    OLDEST_READABLE_FORMAT, RECORDING_FORMAT,
+    BallRecord, FinalRecord, MatchMeta, RobotRecord, ScenarioRecord, ScoreRecord, StateRecord,
+    TickActions, OLDEST_READABLE_FORMAT, RECORDING_FORMAT,
 };
 pub use reader::Recording;
 pub use replay::{replay, ReplayOutcome};
@@ -67,4 +67,6 @@ pub enum RecordError {
     },
     #[error("cannot re-create the match: {0}")]
     Match(#[from] naosoccer_referee::MatchError),
+    #[error("cannot re-create the match's scenario: {0}")]
+    Scenario(#[from] naosoccer_referee::ScenarioError),
 }

@@ -1,6 +1,6 @@
 //! The JSON messages of the naosoccer channels (see docs/RECORDINGS.md).
 
-use naosoccer_proto::{Action, MatchStats, RobotId, Tick, ROBOTS};
+use naosoccer_proto::{Action, MatchStats, RobotId, Team, Tick, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 use serde::{Deserialize, Serialize};
 
@@ -37,6 +37,21 @@ pub struct MatchMeta {
     pub mode: Option<String>,
     pub control_hz: f32,
     pub total_ticks: u64,
+    /// The scenario the match started from (docs/SCENARIOS.md), if it did
+    /// not start from the kick-off; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenario: Option<ScenarioRecord>,
+}
+
+/// A recorded match's scenario: replay parses the file's text again and
+/// starts the match from it with the recorded seed and colour.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScenarioRecord {
+    pub name: String,
+    /// The colour the scenario's own team played.
+    pub own: Team,
+    /// The scenario file's text, as read.
+    pub toml: String,
 }
 
 impl MatchMeta {
@@ -55,6 +70,11 @@ impl MatchMeta {
             mode: None,
             control_hz: m.config().control_hz,
             total_ticks: m.total_ticks(),
+            scenario: m.scenario().map(|(name, toml, own)| ScenarioRecord {
+                name: name.to_owned(),
+                own,
+                toml: toml.to_owned(),
+            }),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Re-simulating a recording and comparing every tick's state.
 
 use naosoccer_proto::Tick;
-use naosoccer_referee::Match;
+use naosoccer_referee::{Match, Scenario};
 
 use crate::messages::StateRecord;
 use crate::reader::Recording;
@@ -28,7 +28,13 @@ pub enum ReplayOutcome {
 /// Re-runs the match from its config, seed and recorded actions and compares
 /// the state after every tick with the recorded one.
 pub fn replay(rec: &Recording) -> Result<ReplayOutcome, RecordError> {
-    let mut m = Match::new(&rec.meta.config, rec.meta.seed)?;
+    let mut m = match &rec.meta.scenario {
+        None => Match::new(&rec.meta.config, rec.meta.seed)?,
+        Some(s) => {
+            let scenario = Scenario::from_toml(&s.toml, Some(&s.name))?;
+            Match::with_scenario(&rec.meta.config, rec.meta.seed, &scenario, s.own)?
+        }
+    };
     let mut states = rec.states.iter().peekable();
     let check = |m: &Match, recorded: &StateRecord| -> Option<ReplayOutcome> {
         // The hash covers the raw bits of every body and the referee's
@@ -40,8 +46,9 @@ pub fn replay(rec: &Recording) -> Result<ReplayOutcome, RecordError> {
             replayed: Box::new(replayed),
         })
     };
-    // States are written at tick 0 and after each step, in tick order.
-    if let Some(s) = states.next_if(|s| s.tick == Tick::ZERO) {
+    // States are written at the start (tick 0, or a scenario's first
+    // tick) and after each step, in tick order.
+    if let Some(s) = states.next_if(|s| s.tick == m.tick()) {
         if let Some(d) = check(&m, s) {
             return Ok(d);
         }

@@ -30,6 +30,7 @@ fn meta(cfg: &MatchConfig, seed: u64, m: &Match) -> MatchMeta {
         mode: None,
         control_hz: cfg.control_hz,
         total_ticks: m.total_ticks(),
+        scenario: None,
     }
 }
 

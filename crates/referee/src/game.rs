@@ -14,6 +14,7 @@ use crate::rules::{
     goal::Scored, segment_distance, Clock, Command, FallRule, Field, GoalRule, KickOff,
     OutOfBoundsRule, Outcome, PassMade, PassRule, PossessionRule, RestartRule, SetPlayRule,
 };
+use crate::scenario::ScenarioError;
 
 /// Why a match could not be set up.
 #[derive(Debug, thiserror::Error)]
@@ -23,7 +24,11 @@ pub enum MatchError {
     Config(#[from] ConfigError),
     #[error("cannot build the simulation: {0}")]
     Sim(#[from] SimError),
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
 }
+
+mod start;
 
 /// One match: the sim, the rules and everything they remember.
 pub struct Match {
@@ -44,8 +49,15 @@ pub struct Match {
     /// Control ticks played.
     tick: Tick,
     finished: bool,
-    /// The start's kick-off, announced with the first tick's events.
-    announce_start: bool,
+    /// The start's kick-off (or a scenario's set play), announced with the
+    /// first tick's events.
+    announce: Option<Event>,
+    /// Robots out of play (a scenario's absent robots): the sim holds them
+    /// off the pitch and their actions are ignored.
+    off: [bool; ROBOTS],
+    /// The scenario the match started from: its name, its file's text and
+    /// the own team's colour (what a recording needs to re-create the start).
+    scenario: Option<(std::sync::Arc<str>, std::sync::Arc<str>, Team)>,
     controller: Option<RobotId>,
     /// Goals, indexed by `Team::index`.
     score: Score,
@@ -97,7 +109,9 @@ impl Match {
             ),
             tick: Tick::ZERO,
             finished: false,
-            announce_start: true,
+            announce: None,
+            off: [false; ROBOTS],
+            scenario: None,
             controller: None,
             score: Score::default(),
             stats: MatchStats::default(),
@@ -107,6 +121,10 @@ impl Match {
             cfg: cfg.clone(),
         };
         m.place_for_kickoff(m.kickoff.first(), Tick::ZERO);
+        m.announce = Some(Event::KickOff {
+            tick: Tick::ZERO,
+            team: m.kickoff.first(),
+        });
         Ok(m)
     }
 
@@ -150,11 +168,8 @@ impl Match {
             return &self.outcome.events;
         }
         let tick = self.tick;
-        if std::mem::take(&mut self.announce_start) {
-            self.outcome.events.push(Event::KickOff {
-                tick,
-                team: self.kickoff.first(),
-            });
+        if let Some(e) = self.announce.take() {
+            self.outcome.events.push(e);
         }
         // A step of `forward` covers about walk_speed / control_hz: the
         // keep-out margin, so a robot on the edge cannot step inside.
@@ -163,7 +178,7 @@ impl Match {
         for (i, &a) in actions.iter().enumerate() {
             let snap = &self.sim.snapshot().robots[i];
             let robot_team = RobotId::from_index(i).map(RobotId::team);
-            let cmd = if self.fall.is_down(i) {
+            let cmd = if self.fall.is_down(i) || self.off[i] {
                 SimCommand::Stay
             } else if matches!(a, Action::Shoot | Action::Pass) && robot_team == kept_out {
                 // Set play: the other team may not kick.
@@ -372,7 +387,7 @@ impl Match {
         if !matches!(scored, Some(Scored::Goal(_))) {
             // After a goal every robot goes to its kick-off place anyway.
             self.out_of_bounds
-                .check_robots(snap, &self.kickoff, tick, out);
+                .check_robots(snap, &self.kickoff, &self.off, tick, out);
         }
         self.fall.check(snap, tick, out);
         if !ball_replaced {
@@ -596,6 +611,11 @@ impl Match {
         h.u64(self.set_play.fingerprint());
         h.u64(self.restart.fingerprint());
         h.u64(self.kickoff.first().index() as u64);
+        // Only a scenario takes robots out of play, so matches without one
+        // keep the hashes they had before scenarios existed.
+        if self.off.contains(&true) {
+            h.u64(self.off.iter().fold(0, |acc, &o| acc * 2 + u64::from(o)));
+        }
         h.finish()
     }
 

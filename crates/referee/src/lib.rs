@@ -10,17 +10,21 @@
 //!   score and statistics (derived from the event stream) and builds each
 //!   player's observation, mirrored so every team attacks +x.
 //! - [`MatchConfig`]: the whole match in one TOML file (`assets/match.toml`).
+//! - [`Scenario`]: a match started from a documented state, and the judge
+//!   of its end conditions (docs/SCENARIOS.md).
 
 pub mod config;
 mod game;
 mod observe;
 pub mod rules;
+pub mod scenario;
 mod sim_glue;
 
 pub use config::{ConfigError, FirstKickOff, MatchConfig, Placement, RewardConfig, RulesConfig};
 pub use game::{log_compress, Match, MatchError};
 pub use observe::blank_observation;
 pub use rules::{Command, Field};
+pub use scenario::{Ending, Judge, Scenario, ScenarioError};
 
 /// The default configuration file, as shipped (`assets/match.toml`).
 pub const DEFAULT_CONFIG_TOML: &str = include_str!("../../../assets/match.toml");

@@ -91,9 +91,17 @@ pub struct RobotModel {
 }
 
 impl RobotModel {
-    /// The project's NAO H25 (`assets/nao.urdf`, compiled in).
+    /// The project's NAO H25 (`assets/nao.urdf`, compiled in). Parsed once
+    /// per process and cloned after: parsing the XML cost about as much as
+    /// building the rest of a match's world (a drill builds a match per
+    /// start), and the same text always parses to the same model.
     pub fn builtin() -> Result<RobotModel, SimError> {
-        RobotModel::from_urdf_str(NAO_URDF)
+        static PARSED: std::sync::OnceLock<RobotModel> = std::sync::OnceLock::new();
+        if let Some(m) = PARSED.get() {
+            return Ok(m.clone());
+        }
+        let m = RobotModel::from_urdf_str(NAO_URDF)?;
+        Ok(PARSED.get_or_init(|| m).clone())
     }
 
     /// Reads a URDF file.

@@ -37,6 +37,18 @@ impl Clock {
         self.total_ticks
     }
 
+    /// The first tick of half `half` (1 or 2) and the tick after its last
+    /// (`None` for a half the match does not have).
+    pub fn half_span(&self, half: u8) -> Option<(Tick, Tick)> {
+        match half {
+            1 => Some((Tick::ZERO, self.second_half)),
+            2 if self.second_half.get() < self.total_ticks => {
+                Some((self.second_half, Tick::new(self.total_ticks)))
+            }
+            _ => None,
+        }
+    }
+
     /// The half that the tick `tick` is in: 1 or 2.
     pub fn half(&self, tick: Tick) -> u8 {
         if tick >= self.second_half {

@@ -55,6 +55,14 @@ impl FallRule {
         self.up_at = [None; ROBOTS];
     }
 
+    /// Counts robot `robot` as lying from `tick` on, to be stood up after
+    /// the stand-up cost (a staged fall: no `Fall` event).
+    pub fn lay(&mut self, robot: usize, tick: Tick) {
+        if let Some(u) = self.up_at.get_mut(robot) {
+            *u = Some(tick + self.standup_ticks);
+        }
+    }
+
     /// Forgets one robot's fall (it was reset upright).
     pub fn clear_robot(&mut self, robot: usize) {
         if let Some(u) = self.up_at.get_mut(robot) {

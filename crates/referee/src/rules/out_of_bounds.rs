@@ -17,7 +17,7 @@
 //! the lines, standing or lying, is reset upright to its predetermined
 //! position.
 
-use naosoccer_proto::{Event, RobotId, SetPlayKind, Team, Tick};
+use naosoccer_proto::{Event, RobotId, SetPlayKind, Team, Tick, ROBOTS};
 use naosoccer_sim::Snapshot;
 
 use super::field::{goal_kick_spot, last_touch, Field};
@@ -136,10 +136,18 @@ impl OutOfBoundsRule {
 
     /// The robots: one whose torso is further than the margin outside the
     /// lines goes back to its predetermined place, upright, whether it
-    /// stands or lies.
-    pub fn check_robots(&self, snap: &Snapshot, kickoff: &KickOff, tick: Tick, out: &mut Outcome) {
+    /// stands or lies. Robots out of play (`off`, a scenario's absent
+    /// robots) are left where they are.
+    pub fn check_robots(
+        &self,
+        snap: &Snapshot,
+        kickoff: &KickOff,
+        off: &[bool; ROBOTS],
+        tick: Tick,
+        out: &mut Outcome,
+    ) {
         for (i, r) in snap.robots.iter().enumerate() {
-            if self.field.contains(r.pos[0], r.pos[1], self.robot_margin) {
+            if off[i] || self.field.contains(r.pos[0], r.pos[1], self.robot_margin) {
                 continue;
             }
             let Some(robot) = RobotId::from_index(i) else {
@@ -279,7 +287,7 @@ mod tests {
         s.robots[5].pos = [0.0, -2.9, 0.1];
         let kickoff = KickOff::new(&RulesConfig::default(), Team::Blue);
         let mut out = Outcome::default();
-        rule().check_robots(&s, &kickoff, Tick::new(7), &mut out);
+        rule().check_robots(&s, &kickoff, &[false; ROBOTS], Tick::new(7), &mut out);
         let robot = RobotId::from_index(5).unwrap();
         assert_eq!(
             out.events,

@@ -15,6 +15,7 @@ use crate::world::{build, default_robot_spot, tilt_of};
 use crate::{BallState, Command, RobotModel, RobotState, SimConfig, SimError, Snapshot, ROBOTS};
 
 mod placement;
+mod stage;
 mod step;
 
 /// A stumbling robot is thrown over only while it tips slower than this,

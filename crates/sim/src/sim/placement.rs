@@ -207,6 +207,9 @@ impl Sim {
     }
 
     fn put_robot(&mut self, robot: usize, (x, y): (f32, f32), heading: f32) {
+        if !self.in_play(robot) {
+            return;
+        }
         let pose = standing_pose(self.torso_height, x, y, heading);
         let body = &mut self.world.bodies[self.robots[robot]];
         body.set_position(pose, true);
