@@ -20,7 +20,7 @@ use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEA
 use naosoccer_referee::{Ending, Judge, Match, MatchConfig, Scenario};
 use serde_json::{json, Value};
 
-use crate::eval::{eval_match_seed, Rate, Side};
+use crate::eval::{eval_match_seed, for_each_slot, Rate, Side};
 use crate::PolicyError;
 
 /// Which starts of a drill are played: starts `0..starts` under `seed`.
@@ -144,17 +144,7 @@ pub fn play_drill(
                 }
             }
         }
-        let threads = threads.clamp(1, slots.len().max(1));
-        let per = slots.len().div_ceil(threads).max(1);
-        if threads == 1 {
-            slots.iter_mut().for_each(step_slot);
-        } else {
-            std::thread::scope(|s| {
-                for chunk in slots.chunks_mut(per) {
-                    s.spawn(move || chunk.iter_mut().for_each(step_slot));
-                }
-            });
-        }
+        for_each_slot(&mut slots, threads, step_slot);
     }
     Ok(Some(
         slots

@@ -347,17 +347,7 @@ pub fn play_matches_until(
                 }
             }
         }
-        let threads = threads.clamp(1, slots.len().max(1));
-        let per = slots.len().div_ceil(threads).max(1);
-        if threads == 1 {
-            slots.iter_mut().for_each(step_slot);
-        } else {
-            std::thread::scope(|s| {
-                for chunk in slots.chunks_mut(per) {
-                    s.spawn(move || chunk.iter_mut().for_each(step_slot));
-                }
-            });
-        }
+        for_each_slot(&mut slots, threads, step_slot);
     }
     Ok(Some(
         slots
@@ -387,6 +377,24 @@ fn observe_all(slot: &mut Slot) {
     for r in RobotId::all() {
         slot.m
             .observe_into(r.team(), r.player(), &mut slot.obs[r.index()]);
+    }
+}
+
+/// Runs `step` on every slot, the slots split into up to `threads` runs
+/// of neighbours on scoped threads. Each slot holds its own match, so the
+/// thread count changes no result. Evaluations and the academy step their
+/// batches with it.
+pub(crate) fn for_each_slot<S: Send>(slots: &mut [S], threads: usize, step: fn(&mut S)) {
+    let threads = threads.clamp(1, slots.len().max(1));
+    let per = slots.len().div_ceil(threads).max(1);
+    if threads == 1 {
+        slots.iter_mut().for_each(step);
+    } else {
+        std::thread::scope(|s| {
+            for chunk in slots.chunks_mut(per) {
+                s.spawn(move || chunk.iter_mut().for_each(step));
+            }
+        });
     }
 }
 
