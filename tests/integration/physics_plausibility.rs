@@ -905,8 +905,8 @@ fn issue_39_robots_pushing_toe_to_toe_keep_their_rollers_apart() {
             0.03 * k as f32,
             std::f32::consts::PI + 0.1 * (k as f32 - 2.0),
         );
-        sim.set_command(0, naosoccer_sim::Command::Forward);
-        sim.set_command(1, naosoccer_sim::Command::Forward);
+        sim.set_command(0, naosoccer_sim::Action::Forward);
+        sim.set_command(1, naosoccer_sim::Action::Forward);
         let mut deepest: f32 = 0.0;
         let mut pushed = 0;
         for _ in 0..sim.config().steps_for(10.0) {

@@ -6,7 +6,7 @@ use naosoccer_proto::{
     Action, Event, GoalPhase, MatchStats, Observation, RobotId, Score, SetPlayKind, SetPlayObs,
     Team, Tick, PLAYERS_PER_TEAM, ROBOTS,
 };
-use naosoccer_sim::{Command as SimCommand, RobotModel, Sim, SimError, StateHasher};
+use naosoccer_sim::{RobotModel, Sim, SimError, StateHasher};
 
 use crate::config::{ConfigError, MatchConfig, RewardConfig};
 use crate::observe::{self, ObsContext};
@@ -184,10 +184,10 @@ impl Match {
             let snap = &self.sim.snapshot().robots[i];
             let robot_team = RobotId::from_index(i).map(RobotId::team);
             let cmd = if self.fall.is_down(i) || self.off[i] {
-                SimCommand::Stay
+                Action::Stay
             } else if matches!(a, Action::Shoot | Action::Pass) && robot_team == kept_out {
                 // Set play: the other team may not kick.
-                SimCommand::Stay
+                Action::Stay
             } else if a == Action::Forward
                 && RobotId::from_index(i).is_some_and(|robot| {
                     self.set_play.blocks_forward(
@@ -200,11 +200,11 @@ impl Match {
                 })
             {
                 // Set play: the other team keeps its distance.
-                SimCommand::Stay
+                Action::Stay
             } else {
-                sim_command(a)
+                a
             };
-            if cmd == SimCommand::Pass && !self.sim.snapshot().robots[i].kicking {
+            if cmd == Action::Pass && !self.sim.snapshot().robots[i].kicking {
                 // The receiver is chosen from the kicker's observation, as a
                 // client would choose it (`proto::pass_receiver`).
                 let robot = RobotId::from_index(i).expect("a robot index");
@@ -417,17 +417,6 @@ impl Match {
         self.set_play
             .award(SetPlayKind::KickOff, team, (0.0, 0.0), first_tick);
         self.restart.kick_off(team, first_tick);
-    }
-}
-
-fn sim_command(a: Action) -> SimCommand {
-    match a {
-        Action::Forward => SimCommand::Forward,
-        Action::TurnLeft => SimCommand::TurnLeft,
-        Action::TurnRight => SimCommand::TurnRight,
-        Action::Shoot => SimCommand::Shoot,
-        Action::Stay => SimCommand::Stay,
-        Action::Pass => SimCommand::Pass,
     }
 }
 

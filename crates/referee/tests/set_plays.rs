@@ -5,7 +5,6 @@ use std::f32::consts::FRAC_PI_2;
 
 use naosoccer_proto::{Action, Event, GoalPhase, RobotId, Score, SetPlayKind, Team, ROBOTS};
 use naosoccer_referee::{FirstKickOff, Match, MatchConfig};
-use naosoccer_sim::Command as SimCommand;
 
 const STAY: [Action; ROBOTS] = [Action::Stay; ROBOTS];
 
@@ -314,7 +313,7 @@ fn the_other_team_cannot_creep_in_or_kick_during_a_set_play() {
             closest = closest.min(dist_to(&m, robot(Team::Blue, p).index(), spot));
         }
         let s = &m.sim().snapshot().robots[b3];
-        assert_eq!(s.command, SimCommand::Stay, "blue 3's kick was not refused");
+        assert_eq!(s.command, Action::Stay, "blue 3's kick was not refused");
         assert!(!s.kicking);
     }
     assert!(ticks > 100, "the set play lasted {ticks} ticks");

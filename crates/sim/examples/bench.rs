@@ -14,7 +14,7 @@
 
 use std::time::Instant;
 
-use naosoccer_sim::{BareWorld, Command, RobotModel, Sim, SimConfig, ROBOTS};
+use naosoccer_sim::{Action, BareWorld, RobotModel, Sim, SimConfig, ROBOTS};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -48,9 +48,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "chase" => chase_ball(&mut sim, tick),
                 "walk" => {
                     let cmd = if tick % 40 < 20 {
-                        Command::Forward
+                        Action::Forward
                     } else {
-                        Command::TurnLeft
+                        Action::TurnLeft
                     };
                     for i in 0..ROBOTS {
                         sim.set_command(i, cmd);
@@ -101,15 +101,15 @@ fn chase_ball(sim: &mut Sim, tick: u64) {
             .rem_euclid(std::f32::consts::TAU)
             - std::f32::consts::PI;
         let cmd = if dx.hypot(dy) < 0.22 && err.abs() < 0.3 {
-            Command::Shoot
+            Action::Shoot
         } else if err > 0.25 {
-            Command::TurnLeft
+            Action::TurnLeft
         } else if err < -0.25 {
-            Command::TurnRight
+            Action::TurnRight
         } else if (tick + i as u64) % 50 == 0 {
-            Command::Stay
+            Action::Stay
         } else {
-            Command::Forward
+            Action::Forward
         };
         sim.set_command(i, cmd);
     }

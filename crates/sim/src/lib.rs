@@ -15,7 +15,7 @@
 //! inertias. A gait model drives it with bounded forces (see [`Sim::step`]).
 //!
 //! The entry points: [`Sim`] (build from a [`SimConfig`] and a
-//! [`RobotModel`], set [`Command`]s, `step`, read the [`Snapshot`], place
+//! [`RobotModel`], set [`Action`]s, `step`, read the [`Snapshot`], place
 //! bodies for restarts, `state_hash`), and [`BareWorld`], the same bodies
 //! without controllers, the benchmarks' floor.
 
@@ -41,28 +41,10 @@ use serde::{Deserialize, Serialize};
 /// four are a team is the referee's business).
 pub use naosoccer_proto::ROBOTS;
 
-/// What a robot's controller does until told otherwise: the paper's five
-/// actions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Command {
-    /// Walk ahead at `walk_speed` (with gait drift).
-    Forward,
-    /// Turn on the spot at `turn_speed`, counter-clockwise (heading grows).
-    TurnLeft,
-    /// Turn on the spot at `turn_speed`, clockwise (heading shrinks).
-    TurnRight,
-    /// Kick: wind-up, strike, recovery. Once started a kick runs to its end;
-    /// while `Shoot` is held the robot kicks again and again.
-    Shoot,
-    /// Stand still (and resist pushes with the bounded drive force).
-    #[default]
-    Stay,
-    /// A kick as `Shoot`, swung from the ball toward the point last given
-    /// by [`Sim::set_pass_target`] (along the heading if none), as fast as
-    /// rolls the ball [`PASS_OVERSHOOT`] metres past that point.
-    Pass,
-}
+/// What a robot's controller does until told otherwise: the protocol's
+/// action, one enum from the wire to the physics (what each does to the
+/// body is on its variants).
+pub use naosoccer_proto::Action;
 
 /// How far past its target point a `Pass` kick rolls the ball (metres), so
 /// that it reaches the receiver still moving.
@@ -113,7 +95,7 @@ pub struct RobotState {
     /// beyond a touch or goal line do not count.
     pub last_ball_touch_step: Option<u64>,
     /// The command it holds.
-    pub command: Command,
+    pub command: Action,
 }
 
 /// A kick that moved the ball.

@@ -1,7 +1,7 @@
 //! Behaviour of the real physics: the model, each action, kicks, pushes and
 //! falls, contacts, the ball, determinism. One test binary, a module per area.
 
-use naosoccer_sim::{Command, Primitive, RobotModel, Sim, SimConfig, ROBOTS};
+use naosoccer_sim::{Action, Primitive, RobotModel, Sim, SimConfig, ROBOTS};
 
 /// A sim whose robots stand far from the test area (robot 0 at the centre
 /// facing +x, the others in a row along the far touch line), ball parked in
@@ -181,7 +181,7 @@ mod actions {
         // 0.2 m/s for 5 s; gait speed noise is +/-10 %, drift bends the path.
         for seed in [1, 2, 3] {
             let mut sim = lab(seed);
-            sim.set_command(0, Command::Forward);
+            sim.set_command(0, Action::Forward);
             run(&mut sim, 5.0);
             let r = sim.snapshot().robots[0];
             let d = dist2(r.pos, [0.0; 3]);
@@ -194,12 +194,12 @@ mod actions {
     #[test]
     fn turn_left_turns_left_and_turn_right_right() {
         let mut sim = lab(4);
-        sim.set_command(0, Command::TurnLeft);
+        sim.set_command(0, Action::TurnLeft);
         run(&mut sim, 2.0);
         let h = sim.snapshot().robots[0].heading;
         // 0.5 rad/s for 2 s.
         assert!((0.8..=1.1).contains(&h), "turned left to {h}");
-        sim.set_command(0, Command::TurnRight);
+        sim.set_command(0, Action::TurnRight);
         run(&mut sim, 4.0);
         let h = sim.snapshot().robots[0].heading;
         assert!((-1.1..=-0.8).contains(&h), "turned right to {h}");
@@ -216,7 +216,7 @@ mod actions {
         let mut ys = Vec::new();
         for seed in [10, 11, 12, 13] {
             let mut sim = lab(seed);
-            sim.set_command(0, Command::Forward);
+            sim.set_command(0, Action::Forward);
             run(&mut sim, 8.0);
             ys.push(sim.snapshot().robots[0].heading);
         }
@@ -233,7 +233,7 @@ mod kick {
     fn kick_with_ball_at(x: f32, y: f32) -> (Sim, f32, usize) {
         let mut sim = lab(5);
         assert_eq!(sim.place_ball(x, y), (x, y));
-        sim.set_command(0, Command::Shoot);
+        sim.set_command(0, Action::Shoot);
         let mut kicks = 0;
         let mut kicking_seen = false;
         for _ in 0..sim.config().steps_for(0.7) {
@@ -242,7 +242,7 @@ mod kick {
             kicking_seen |= sim.snapshot().robots[0].kicking;
         }
         assert!(kicking_seen);
-        sim.set_command(0, Command::Stay);
+        sim.set_command(0, Action::Stay);
         let moved = dist2(sim.snapshot().ball.pos, [x, y, 0.0]);
         (sim, moved, kicks)
     }
@@ -271,7 +271,7 @@ mod kick {
     fn a_kick_takes_time() {
         let mut sim = lab(6);
         sim.place_ball(0.18, 0.0);
-        sim.set_command(0, Command::Shoot);
+        sim.set_command(0, Action::Shoot);
         let windup = sim.config().kick_windup;
         for _ in 0..sim.config().steps_for(windup * 0.8) {
             sim.step();
@@ -358,7 +358,7 @@ mod contact {
         assert!(r.tilt > 1.0, "not lying: tilt {}", r.tilt);
         assert!(r.pos[2] < 0.2, "torso still high: {:?}", r.pos);
         // Lying is an obstacle, not a walker: Forward does nothing.
-        sim.set_command(0, Command::Forward);
+        sim.set_command(0, Action::Forward);
         let before = r.pos;
         run(&mut sim, 1.0);
         assert!(dist2(sim.snapshot().robots[0].pos, before) < 0.05);
@@ -393,7 +393,7 @@ mod contact {
     fn a_walking_robot_does_not_pass_through_another() {
         let mut sim = lab(13);
         sim.place_robot(1, 0.6, 0.0, std::f32::consts::PI);
-        sim.set_command(0, Command::Forward);
+        sim.set_command(0, Action::Forward);
         run(&mut sim, 6.0);
         let s = sim.snapshot();
         let (a, b) = (s.robots[0].pos, s.robots[1].pos);
@@ -411,8 +411,8 @@ mod contact {
     fn walking_against_a_robot_stumbles_sooner_or_later() {
         let mut sim = lab(16);
         sim.place_robot(1, 0.6, 0.0, std::f32::consts::PI);
-        sim.set_command(0, Command::Forward);
-        sim.set_command(1, Command::Forward);
+        sim.set_command(0, Action::Forward);
+        sim.set_command(1, Action::Forward);
         let mut fell = None;
         for k in 0..sim.config().steps_for(60.0) {
             sim.step();
@@ -437,8 +437,8 @@ mod contact {
         };
         let mut sim = lab_with(&cfg, 16);
         sim.place_robot(1, 0.6, 0.0, std::f32::consts::PI);
-        sim.set_command(0, Command::Forward);
-        sim.set_command(1, Command::Forward);
+        sim.set_command(0, Action::Forward);
+        sim.set_command(1, Action::Forward);
         run(&mut sim, 20.0);
         let s = sim.snapshot();
         assert!(!s.robots[0].fallen && !s.robots[1].fallen);
@@ -453,7 +453,7 @@ mod contact {
     fn a_walking_robot_dribbles_the_ball_and_touch_is_recorded() {
         let mut sim = lab(14);
         sim.place_ball(0.3, 0.0);
-        sim.set_command(0, Command::Forward);
+        sim.set_command(0, Action::Forward);
         run(&mut sim, 3.0);
         let s = sim.snapshot();
         assert!(s.ball.pos[0] > 0.4, "ball not pushed: {:?}", s.ball.pos);
@@ -473,11 +473,11 @@ mod determinism {
             if k % 5 == 0 {
                 for i in 0..ROBOTS {
                     let cmd = match (k / 5 + i as u64) % 7 {
-                        0..=2 => Command::Forward,
-                        3 => Command::TurnLeft,
-                        4 => Command::TurnRight,
-                        5 => Command::Shoot,
-                        _ => Command::Stay,
+                        0..=2 => Action::Forward,
+                        3 => Action::TurnLeft,
+                        4 => Action::TurnRight,
+                        5 => Action::Shoot,
+                        _ => Action::Stay,
                     };
                     sim.set_command(i, cmd);
                 }
@@ -596,8 +596,8 @@ fn every_robot_is_controlled_independently() {
     for i in 0..ROBOTS {
         sim.place_robot(i, -2.5 + 0.7 * i as f32, -1.0, std::f32::consts::FRAC_PI_2);
     }
-    sim.set_command(2, Command::Forward);
-    sim.set_command(5, Command::TurnLeft);
+    sim.set_command(2, Action::Forward);
+    sim.set_command(5, Action::TurnLeft);
     run(&mut sim, 2.0);
     let s = sim.snapshot();
     assert!(s.robots[2].pos[1] > -0.7);
@@ -767,7 +767,7 @@ mod issue_12_placement_and_kick {
     /// velocity after it.
     fn strike_on(v: (f32, f32)) -> (Vec<naosoccer_sim::Kick>, [f32; 3]) {
         let mut sim = lab(27);
-        sim.set_command(0, Command::Shoot);
+        sim.set_command(0, Action::Shoot);
         let windup = sim.config().steps_for(sim.config().kick_windup);
         for _ in 0..windup - 1 {
             sim.step();

@@ -11,16 +11,27 @@ use super::Observation;
     Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize, Default,
 )]
 #[serde(rename_all = "snake_case")]
+///
+/// The same enum drives the physics (`naosoccer_sim` re-exports it): what
+/// the wire says is what the robot's controller does, with no second list
+/// to keep in step.
 pub enum Action {
+    /// Walk ahead at the walk speed (with gait drift).
     Forward,
+    /// Turn on the spot, counter-clockwise (heading grows).
     TurnLeft,
+    /// Turn on the spot, clockwise (heading shrinks).
     TurnRight,
+    /// Kick: wind-up, strike, recovery. Once started a kick runs to its end;
+    /// while `Shoot` is held the robot kicks again and again.
     Shoot,
+    /// Stand still (and resist pushes with the bounded drive force).
     #[default]
     Stay,
     /// Kick toward the teammate [`pass_receiver`] names, at a speed that
-    /// rolls the ball about half a metre past it; with no such teammate, a
-    /// `shoot`. Protocol 1.3.
+    /// rolls the ball about half a metre past it (the sim swings it from
+    /// the ball toward the point the referee gives it, along the heading if
+    /// none); with no such teammate, a `shoot`. Protocol 1.3.
     Pass,
 }
 

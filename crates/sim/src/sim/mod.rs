@@ -12,7 +12,7 @@ use rapier3d::prelude::{ColliderHandle, PhysicsWorld, RigidBody, RigidBodyHandle
 
 use crate::hash::StateHasher;
 use crate::world::{build, default_robot_spot, tilt_of};
-use crate::{BallState, Command, RobotModel, RobotState, SimConfig, SimError, Snapshot, ROBOTS};
+use crate::{Action, BallState, RobotModel, RobotState, SimConfig, SimError, Snapshot, ROBOTS};
 
 mod placement;
 mod stage;
@@ -43,7 +43,7 @@ const FALL_CCD: f32 = 0.1;
 /// Controller state of one robot.
 #[derive(Debug, Clone, Copy)]
 struct Ctrl {
-    command: Command,
+    command: Action,
     fallen: bool,
     /// Steps since the kick began, while kicking.
     kick_phase: Option<u32>,
@@ -68,7 +68,7 @@ struct Ctrl {
 impl Default for Ctrl {
     fn default() -> Self {
         Ctrl {
-            command: Command::Stay,
+            command: Action::Stay,
             fallen: false,
             kick_phase: None,
             drift: 0.0,
@@ -183,7 +183,7 @@ impl Sim {
     /// Sets robot `robot`'s command; it holds until changed. A kick in
     /// progress finishes first; a fallen robot keeps it for after it stands.
     /// Panics if `robot >= ROBOTS`.
-    pub fn set_command(&mut self, robot: usize, cmd: Command) {
+    pub fn set_command(&mut self, robot: usize, cmd: Action) {
         self.ctrl[robot].command = cmd;
         self.snapshot.robots[robot].command = cmd;
     }
@@ -377,7 +377,7 @@ mod tests {
     fn issue_12_a_stumble_is_not_a_fall_until_the_torso_tilts() {
         let mut sim = lab();
         sim.ctrl[0].stumble = Some((-1.0, 0.0, 0));
-        sim.set_command(0, Command::Forward);
+        sim.set_command(0, Action::Forward);
         let fall_tilt = sim.config().fall_tilt;
         let mut fell_at = None;
         for step in 0..sim.config().steps_for(1.5) {
@@ -409,7 +409,7 @@ mod tests {
         let mut sim = Sim::new(&cfg, &model, 1).unwrap();
         sim.place_ball(2.5, 2.0);
         sim.ctrl[0].stumble = Some((-1.0, 0.0, 0));
-        sim.set_command(0, Command::Forward);
+        sim.set_command(0, Action::Forward);
         run(&mut sim, 1.0);
         let r = sim.snapshot().robots[0];
         assert!(!r.fallen && r.tilt < cfg.fall_tilt);

@@ -25,7 +25,7 @@ impl Sim {
         body.set_linvel(Vec3::ZERO, true);
         body.set_angvel(Vec3::ZERO, true);
         body.set_enabled(false);
-        self.set_command(robot, crate::Command::Stay);
+        self.set_command(robot, crate::Action::Stay);
         let c = &mut self.ctrl[robot];
         c.kick_phase = None;
         c.stumble = None;

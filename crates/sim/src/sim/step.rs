@@ -7,7 +7,7 @@ use rapier3d::prelude::{ColliderHandle, ColliderSet, RigidBody};
 
 use super::{heading_of, Sim, FALL_CCD, LIFT_HEIGHT, STUMBLE_RATE};
 use crate::world::{set_sole_friction, tilt_of, ROBOT_TAG};
-use crate::{Command, Kick, SimConfig, ROBOTS};
+use crate::{Action, Kick, SimConfig, ROBOTS};
 
 impl Sim {
     /// One physics step of `dt`:
@@ -79,19 +79,19 @@ impl Sim {
             if c.fallen {
                 continue;
             }
-            if c.kick_phase.is_none() && matches!(c.command, Command::Shoot | Command::Pass) {
+            if c.kick_phase.is_none() && matches!(c.command, Action::Shoot | Action::Pass) {
                 c.kick_phase = Some(0);
                 c.kick_aim = match c.command {
-                    Command::Pass => c.pass_target,
+                    Action::Pass => c.pass_target,
                     _ => None,
                 };
             }
             let (target_v, target_w) = match (c.kick_phase, c.command) {
                 (Some(_), _) => (0.0, 0.0),
-                (None, Command::Forward) => (cfg.walk_speed * c.speed_factor, c.drift),
-                (None, Command::TurnLeft) => (0.0, cfg.turn_speed),
-                (None, Command::TurnRight) => (0.0, -cfg.turn_speed),
-                (None, Command::Stay | Command::Shoot | Command::Pass) => (0.0, 0.0),
+                (None, Action::Forward) => (cfg.walk_speed * c.speed_factor, c.drift),
+                (None, Action::TurnLeft) => (0.0, cfg.turn_speed),
+                (None, Action::TurnRight) => (0.0, -cfg.turn_speed),
+                (None, Action::Stay | Action::Shoot | Action::Pass) => (0.0, 0.0),
             };
             if let Some(phase) = c.kick_phase.as_mut() {
                 *phase += 1;
@@ -110,7 +110,7 @@ impl Sim {
                 sole_height(&self.world.colliders, &self.soles, body.position(), i) > LIFT_HEIGHT;
             c.lifted = if lifted { c.lifted + 1 } else { 0 };
             let tripped = c.kick_phase.is_none()
-                && c.command == Command::Forward
+                && c.command == Action::Forward
                 && cfg.stumble_time > 0.0
                 && obstructed(body, &at, i, target_v, cfg.stumble_distance)
                 && self.rng.random::<f32>() < dt / cfg.stumble_time;
