@@ -9,7 +9,7 @@
 
 use naosoccer_learn::obs::OBS_DIM;
 use naosoccer_learn::LearnedPolicy;
-use naosoccer_policy::actions::{banned_actions, mask_row, ACTION_NAMES, MASKED_LOGIT, SHOOT};
+use naosoccer_policy::actions::{banned_actions, mask_row, NetAction, ACTION_NAMES, MASKED_LOGIT};
 use naosoccer_proto::{Observation, Team};
 use naosoccer_referee::{Match, MatchConfig};
 
@@ -79,7 +79,7 @@ fn main() {
             let mut logits = p.outputs(&f, player);
             let in_reach = scale.kick.in_reach(&o);
             if p.decision().is_some_and(|d| d.mask_shoot) && !in_reach {
-                logits[SHOOT] = MASKED_LOGIT;
+                logits[NetAction::Shoot.index()] = MASKED_LOGIT;
             }
             if let Some(d) = p.decision() {
                 mask_row(&mut logits, banned_actions(&o, in_reach, &d));

@@ -42,7 +42,7 @@ use crate::obs::OBS_DIM;
 use crate::replay::{NStep, Replay};
 use crate::run::{make_env, Run, TrainSummary};
 use crate::LearnError;
-use naosoccer_policy::actions::{ACTIONS, SHOOT};
+use naosoccer_policy::actions::{NetAction, ACTIONS};
 
 pub use crate::replay::MASKED_Q;
 
@@ -352,11 +352,15 @@ pub fn epsilon_greedy(q: &[f32], shoot_ok: bool, epsilon: f64, rng: &mut ChaCha8
     if rng.random::<f64>() < epsilon {
         let a = rng.random_range(0..ACTIONS - usize::from(!shoot_ok));
         // Without shoot, the draw skips its index.
-        return if !shoot_ok && a >= SHOOT { a + 1 } else { a };
+        return if !shoot_ok && a >= NetAction::Shoot.index() {
+            a + 1
+        } else {
+            a
+        };
     }
     let mut best = 0; // forward: never the masked shoot
     for (i, &x) in q.iter().enumerate() {
-        if (i != SHOOT || shoot_ok) && x > q[best] {
+        if (i != NetAction::Shoot.index() || shoot_ok) && x > q[best] {
             best = i;
         }
     }
@@ -474,7 +478,7 @@ mod tests {
         .view([2, 5]);
         // Row 0: the ball is out of reach in s'; row 1: in reach.
         let mut m = vec![0.0f32; 10];
-        m[SHOOT] = MASKED_Q;
+        m[NetAction::Shoot.index()] = MASKED_Q;
         let mask = Tensor::from_slice(&m).view([2, 5]);
         assert_eq!(
             values(&td_target_discounted(&r, &g, &q, Some(&q), Some(&mask))),
@@ -497,15 +501,20 @@ mod tests {
         use rand::SeedableRng;
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let q = [0.0f32, 1.0, 0.0, 5.0, 0.0];
-        assert_eq!(epsilon_greedy(&q, true, 0.0, &mut rng), SHOOT);
+        assert_eq!(
+            epsilon_greedy(&q, true, 0.0, &mut rng),
+            NetAction::Shoot.index()
+        );
         assert_eq!(epsilon_greedy(&q, false, 0.0, &mut rng), 1);
         let mut seen = [0usize; ACTIONS];
         for _ in 0..2000 {
             seen[epsilon_greedy(&q, false, 1.0, &mut rng)] += 1;
         }
-        assert_eq!(seen[SHOOT], 0, "{seen:?}");
+        assert_eq!(seen[NetAction::Shoot.index()], 0, "{seen:?}");
         assert!(
-            seen.iter().enumerate().all(|(i, &c)| i == SHOOT || c > 400),
+            seen.iter()
+                .enumerate()
+                .all(|(i, &c)| i == NetAction::Shoot.index() || c > 400),
             "{seen:?}"
         );
         let mut seen = [0usize; ACTIONS];

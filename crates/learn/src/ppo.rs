@@ -36,7 +36,7 @@ use crate::warm_start::{init_weights, SUPPORT_INIT_BIAS};
 use crate::LearnError;
 
 pub use naosoccer_policy::actions::{
-    action_count, action_mask, sample, shoot_mask, DecisionConfig, ACTIONS, PASS, SHOOT, STAY,
+    action_count, action_mask, sample, shoot_mask, DecisionConfig, NetAction, ACTIONS,
 };
 
 /// Trains a team-preset run into `out`, or goes on from `resume` (a
@@ -630,7 +630,7 @@ mod tests {
         for _ in 0..20 {
             ppo.act_masked(&obs, &ok, &[], &mut rng, &mut a, &mut lp);
             for i in 0..n {
-                if a[i] == SHOOT {
+                if a[i] == NetAction::Shoot.index() {
                     assert!(ok[i], "row {i} shot with the ball out of reach");
                     shot_when_allowed += 1;
                 }

@@ -10,7 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use tch::Tensor;
 
 use crate::obs::OBS_DIM;
-use naosoccer_policy::actions::{ACTIONS, SHOOT};
+use naosoccer_policy::actions::{NetAction, ACTIONS};
 
 /// What a masked action's Q-value becomes: never the largest, and (times a
 /// discount of 0 at an episode's end) still finite.
@@ -205,7 +205,7 @@ impl Replay {
             let row = scratch.mask.len();
             scratch.mask.resize(row + ACTIONS, 0.0);
             if !self.next_ok[i] {
-                scratch.mask[row + SHOOT] = MASKED_Q;
+                scratch.mask[row + NetAction::Shoot.index()] = MASKED_Q;
             }
         }
         let shape = [batch as i64, OBS_DIM as i64];

@@ -22,8 +22,7 @@ pub fn init_weights(
     pass_from: naosoccer_proto::Action,
     support_bias: f32,
 ) -> Result<(), LearnError> {
-    use crate::ppo::PASS;
-    use naosoccer_policy::{APPROACH, SUPPORT};
+    use naosoccer_policy::NetAction;
     let file = if path.is_dir() {
         path.join("final.safetensors")
     } else {
@@ -35,7 +34,7 @@ pub fn init_weights(
         return Err(bad("no such weights file".into()));
     }
     let pass_row = pass_from.index();
-    if pass_row >= PASS {
+    if pass_row >= NetAction::Pass.index() {
         return Err(bad(format!(
             "pass cannot start as a copy of {:?}: pick one of the five actions the source has",
             pass_from.name()
@@ -56,7 +55,11 @@ pub fn init_weights(
             // `forward`, its bias lowered by `support_bias`, by default
             // SUPPORT_INIT_BIAS so that it starts rarer than `forward`) and
             // `approach` (an exact copy of `forward`).
-            let (pass, support, approach) = (PASS as i64, SUPPORT as i64, APPROACH as i64);
+            let (pass, support, approach) = (
+                NetAction::Pass.index() as i64,
+                NetAction::Support.index() as i64,
+                NetAction::Approach.index() as i64,
+            );
             let widen = name.starts_with("actor.")
                 && !want.is_empty()
                 && want[1..] == got[1..]
@@ -67,7 +70,7 @@ pub fn init_weights(
                 var.copy_(src);
             } else if widen {
                 var.narrow(0, 0, got[0]).copy_(src);
-                let forward = src.narrow(0, naosoccer_policy::actions::FORWARD as i64, 1);
+                let forward = src.narrow(0, NetAction::Forward.index() as i64, 1);
                 if got[0] <= pass {
                     var.narrow(0, pass, 1)
                         .copy_(&src.narrow(0, pass_row as i64, 1));

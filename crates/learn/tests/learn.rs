@@ -445,7 +445,7 @@ fn issue_13_refreshed_self_play_snapshots_sample_like_the_learner() {
 #[test]
 fn a_hold_decides_when_free_and_persistence_ran_out() {
     use naosoccer_learn::policy::Hold;
-    use naosoccer_learn::ppo::{SHOOT, STAY};
+    use naosoccer_learn::ppo::NetAction;
     use naosoccer_proto::Team;
     use naosoccer_referee::Match;
 
@@ -461,24 +461,24 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
     let half = [4.5, 3.0];
     let mut h = Hold::default();
     assert!(h.must_decide(&at(0, false, false)));
-    h.start(0, Tick::ZERO, &d, half);
+    h.start(NetAction::Forward, Tick::ZERO, &d, half);
     for t in 1..3 {
         assert!(!h.must_decide(&at(t, false, false)), "tick {t} holds");
-        assert_eq!(h.held(&at(t, false, false)), 0);
+        assert_eq!(h.held(&at(t, false, false)), NetAction::Forward);
     }
     assert!(!h.must_decide(&at(3, true, false)), "busy: no decision");
-    assert_eq!(h.held(&at(3, true, false)), STAY);
+    assert_eq!(h.held(&at(3, true, false)), NetAction::Stay);
     assert!(!h.must_decide(&at(4, false, true)), "lying: no decision");
     assert!(
         h.must_decide(&at(5, false, false)),
         "free again, persistence over"
     );
-    h.start(SHOOT, Tick::new(5), &d, half);
+    h.start(NetAction::Shoot, Tick::new(5), &d, half);
     assert!(
         h.must_decide(&at(6, false, false)),
         "a shoot holds one tick"
     );
-    h.start(0, Tick::new(6), &d, half);
+    h.start(NetAction::Forward, Tick::new(6), &d, half);
     assert!(h.must_decide(&at(0, false, false)), "a new match");
 }
 
@@ -488,7 +488,7 @@ fn a_hold_decides_when_free_and_persistence_ran_out() {
 #[test]
 fn a_support_hold_lasts_until_the_robot_arrives() {
     use naosoccer_learn::policy::Hold;
-    use naosoccer_policy::actions::{support_spot, SUPPORT};
+    use naosoccer_policy::actions::{support_spot, NetAction};
     use naosoccer_proto::Team;
     use naosoccer_referee::Match;
 
@@ -517,24 +517,24 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
     };
     let mut h = Hold::default();
     assert!(h.must_decide(&at(0, -2.0, (0.0, 0.0))));
-    h.start(SUPPORT, Tick::ZERO, &d, half);
+    h.start(NetAction::Support, Tick::ZERO, &d, half);
     for t in 1..30 {
         assert!(
             !h.must_decide(&at(t, -2.0, (0.0, 0.0))),
             "tick {t}: still walking"
         );
-        assert_eq!(h.held(&at(t, -2.0, (0.0, 0.0))), SUPPORT);
+        assert_eq!(h.held(&at(t, -2.0, (0.0, 0.0))), NetAction::Support);
     }
     assert!(h.must_decide(&at(30, -2.0, (0.0, 0.0))), "the cap ran out");
     // Arrived: it decides again, but not before `persist` ticks.
-    h.start(SUPPORT, Tick::new(30), &d, half);
+    h.start(NetAction::Support, Tick::new(30), &d, half);
     assert!(!h.must_decide(&at(31, 1.4, (0.0, 0.0))), "persist first");
     assert!(
         h.must_decide(&at(33, 1.4, (0.0, 0.0))),
         "arrived at its spot"
     );
     // The ball comes near (a pass reaches it): it decides.
-    h.start(SUPPORT, Tick::new(40), &d, half);
+    h.start(NetAction::Support, Tick::new(40), &d, half);
     assert!(
         !h.must_decide(&at(43, -2.0, (-1.0, 0.5))),
         "ball 1.1 m away"
@@ -544,12 +544,12 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
         "ball 0.42 m away"
     );
     // Other actions keep holding `persist` ticks.
-    h.start(0, Tick::new(50), &d, half);
+    h.start(NetAction::Forward, Tick::new(50), &d, half);
     assert!(!h.must_decide(&at(51, 1.4, (0.0, 0.0))));
     assert!(h.must_decide(&at(53, -2.0, (0.0, 0.0))));
     // Without the hold, `support` is a movement like any other.
     d.support_hold = 0;
-    h.start(SUPPORT, Tick::new(60), &d, half);
+    h.start(NetAction::Support, Tick::new(60), &d, half);
     assert!(h.must_decide(&at(63, -2.0, (0.0, 0.0))));
 }
 
@@ -562,7 +562,7 @@ fn a_support_hold_lasts_until_the_robot_arrives() {
 #[test]
 fn team_policies_decide_alike_however_they_are_asked() {
     use naosoccer_learn::config::PpoConfig;
-    use naosoccer_learn::ppo::SHOOT;
+    use naosoccer_learn::ppo::NetAction;
     use naosoccer_learn::ActMode;
     use naosoccer_policy::Policy;
     use naosoccer_proto::Team;
@@ -611,7 +611,7 @@ fn team_policies_decide_alike_however_they_are_asked() {
         assert_eq!(a, b.to_vec(), "robot policies vs one team policy");
         assert_eq!(a, c, "robot policies vs batched matches");
         for (p, o) in obs.iter().enumerate() {
-            if a[p].index() == SHOOT {
+            if a[p].index() == NetAction::Shoot.index() {
                 assert!(reach.in_reach(o), "shot out of reach at tick {}", o.tick);
             }
             let me = o.me();
@@ -921,7 +921,7 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
     use naosoccer_learn::nets::QNet;
     use naosoccer_learn::nets::{rows_tensor, ActorCritic};
     use naosoccer_learn::policy::sample_uniform;
-    use naosoccer_learn::ppo::SHOOT;
+    use naosoccer_learn::ppo::NetAction;
     use naosoccer_policy::actions::{argmax, sample};
     use tch::{Kind, Tensor};
 
@@ -1010,8 +1010,8 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
                     let mut a = ours[i * k..(i + 1) * k].to_vec();
                     let mut b = theirs[i * k..(i + 1) * k].to_vec();
                     if !shoot_ok[i] {
-                        a[SHOOT] = f32::NEG_INFINITY;
-                        b[SHOOT] = f32::NEG_INFINITY;
+                        a[NetAction::Shoot.index()] = f32::NEG_INFINITY;
+                        b[NetAction::Shoot.index()] = f32::NEG_INFINITY;
                     }
                     assert_eq!(argmax(&a), argmax(&b), "{spec}: greedy action of row {i}");
                 }
@@ -1025,7 +1025,8 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
                 let mut mask = vec![0.0f32; n * k];
                 for (i, &ok) in shoot_ok.iter().enumerate() {
                     if !ok {
-                        mask[i * k + SHOOT] = naosoccer_policy::actions::MASKED_LOGIT;
+                        mask[i * k + NetAction::Shoot.index()] =
+                            naosoccer_policy::actions::MASKED_LOGIT;
                     }
                 }
                 let mask = Tensor::from_slice(&mask).view([n as i64, k as i64]);
@@ -1205,7 +1206,7 @@ fn actor_logits(p: &naosoccer_learn::ppo::Ppo, rows: &[f32], n: usize) -> Vec<f3
 /// network of another shape is refused by name.
 #[test]
 fn init_from_widens_the_actor_for_the_pass_action() {
-    use naosoccer_learn::ppo::{Ppo, PASS, SHOOT};
+    use naosoccer_learn::ppo::{NetAction, Ppo};
     use naosoccer_learn::warm_start::{init_weights, SUPPORT_INIT_BIAS};
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
@@ -1232,8 +1233,20 @@ fn init_from_widens_the_actor_for_the_pass_action() {
                 "row {i}, action {a}"
             );
         }
-        assert!(close(after[i * 6 + PASS], before[i * 5 + SHOOT]), "row {i}");
-        assert!(close(after[i * 6 + PASS], after[i * 6 + SHOOT]), "row {i}");
+        assert!(
+            close(
+                after[i * 6 + NetAction::Pass.index()],
+                before[i * 5 + NetAction::Shoot.index()]
+            ),
+            "row {i}"
+        );
+        assert!(
+            close(
+                after[i * 6 + NetAction::Pass.index()],
+                after[i * 6 + NetAction::Shoot.index()]
+            ),
+            "row {i}"
+        );
     }
     // `--pass-init turn_left`: pass starts as turn_left, the rest as before;
     // pass cannot start as itself.
@@ -1246,7 +1259,7 @@ fn init_from_widens_the_actor_for_the_pass_action() {
         }
         assert!(
             close(
-                turned[i * 6 + PASS],
+                turned[i * 6 + NetAction::Pass.index()],
                 before[i * 5 + Action::TurnLeft.index()]
             ),
             "row {i}"
@@ -1290,9 +1303,8 @@ fn init_from_widens_the_actor_for_the_pass_action() {
 #[test]
 fn init_from_widens_the_actor_for_the_support_action() {
     use naosoccer_learn::config::{PpoConfig, Preset};
-    use naosoccer_learn::ppo::{Ppo, PASS, SHOOT};
+    use naosoccer_learn::ppo::{NetAction, Ppo};
     use naosoccer_learn::warm_start::{init_weights, SUPPORT_INIT_BIAS};
-    use naosoccer_policy::SUPPORT;
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
     let [five, six, seven, _] = widening_configs();
@@ -1315,7 +1327,10 @@ fn init_from_widens_the_actor_for_the_support_action() {
         init_weights(&mut even, &file, Action::Shoot, 0.0).unwrap();
         let level = logits(&even);
         for i in 0..n {
-            assert!(close(level[i * 7 + SUPPORT], before[i * k]), "{k}: row {i}");
+            assert!(
+                close(level[i * 7 + NetAction::Support.index()], before[i * k]),
+                "{k}: row {i}"
+            );
         }
         for i in 0..n {
             for a in 0..k {
@@ -1325,12 +1340,21 @@ fn init_from_widens_the_actor_for_the_support_action() {
                 );
             }
             if k == 5 {
-                assert!(close(after[i * 7 + PASS], before[i * 5 + SHOOT]), "row {i}");
+                assert!(
+                    close(
+                        after[i * 7 + NetAction::Pass.index()],
+                        before[i * 5 + NetAction::Shoot.index()]
+                    ),
+                    "row {i}"
+                );
             }
             assert!(
-                close(after[i * 7 + SUPPORT], before[i * k] - SUPPORT_INIT_BIAS),
+                close(
+                    after[i * 7 + NetAction::Support.index()],
+                    before[i * k] - SUPPORT_INIT_BIAS
+                ),
                 "{k}: row {i}: support {} forward {}",
-                after[i * 7 + SUPPORT],
+                after[i * 7 + NetAction::Support.index()],
                 before[i * k]
             );
         }
@@ -1355,7 +1379,7 @@ fn init_from_widens_the_actor_for_the_support_action() {
 fn init_from_widens_the_actor_for_the_approach_action() {
     use naosoccer_learn::ppo::Ppo;
     use naosoccer_learn::warm_start::init_weights;
-    use naosoccer_policy::{APPROACH, SUPPORT};
+    use naosoccer_policy::NetAction;
     let _g = torch_lock();
     let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
     let [five, six, seven, eight] = widening_configs();
@@ -1381,9 +1405,15 @@ fn init_from_widens_the_actor_for_the_approach_action() {
                 );
             }
             let forward = before[i * k];
-            assert!(close(after[i * 8 + APPROACH], forward), "{k}: row {i}");
+            assert!(
+                close(after[i * 8 + NetAction::Approach.index()], forward),
+                "{k}: row {i}"
+            );
             if k < 7 {
-                assert!(close(after[i * 8 + SUPPORT], forward - 0.5), "{k}: row {i}");
+                assert!(
+                    close(after[i * 8 + NetAction::Support.index()], forward - 0.5),
+                    "{k}: row {i}"
+                );
             }
         }
     }

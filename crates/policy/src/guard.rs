@@ -11,7 +11,7 @@
 use naosoccer_proto::Observation;
 use serde::{Deserialize, Serialize};
 
-use crate::actions::{FORWARD, SHOOT};
+use crate::actions::NetAction;
 
 /// Where the guard holds, in the team's frame (own goal at x = -`half_length`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -57,7 +57,7 @@ impl OwnGoalGuard {
         let ahead = d[0] * c + d[1] * s;
         let side = -d[0] * s + d[1] * c;
         if c < -0.2 && ahead > 0.0 && ahead < 0.5 && side.abs() < 0.3 {
-            (1 << FORWARD) | (1 << SHOOT)
+            NetAction::Forward.bit() | NetAction::Shoot.bit()
         } else {
             0
         }
@@ -114,7 +114,7 @@ mod tests {
     #[test]
     fn facing_the_own_goal_at_a_ball_on_its_line_walking_and_kicking_are_banned() {
         let g = OwnGoalGuard::for_pitch(6.0, 2.6);
-        let both = (1 << FORWARD) | (1 << SHOOT);
+        let both = NetAction::Forward.bit() | NetAction::Shoot.bit();
         // A recorded case: the ball at the line, the robot 0.15 m from it,
         // facing its goal at an angle.
         let o = obs(robot(-2.82, -1.0, 2.4), [-2.92, -0.9]);

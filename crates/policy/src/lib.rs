@@ -35,8 +35,8 @@ pub mod obs;
 use naosoccer_proto::Observation;
 
 pub use actions::{
-    approach_action, support_action, to_action, DecisionConfig, SupportSpot, ACTIONS, APPROACH,
-    MAX_ACTIONS, PASS, SHOOT, STAY, SUPPORT,
+    approach_action, support_action, to_action, DecisionConfig, NetAction, SupportSpot, ACTIONS,
+    MAX_ACTIONS,
 };
 pub use bots::{
     is_builtin_spec, Idle, ParsePolicyError, Policy, PolicyKind, RandomPolicy, Scripted,

@@ -9,7 +9,7 @@ use naosoccer_policy::actions::{
     APPROACH_ONLY_BANNED, ROLE_BANNED,
 };
 use naosoccer_policy::obs::KickReach;
-use naosoccer_policy::{to_action, APPROACH, SUPPORT};
+use naosoccer_policy::{to_action, NetAction};
 use naosoccer_proto::{Action, Team, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 
@@ -70,7 +70,7 @@ fn approach_goes_round_behind_the_ball_and_takes_it_toward_the_goal() {
             break;
         }
         let mut joint = [Action::Stay; ROBOTS];
-        joint[1] = to_action(APPROACH, &obs, h, SupportSpot::Ahead);
+        joint[1] = to_action(NetAction::Approach, &obs, h, SupportSpot::Ahead);
         assert_eq!(joint[1], approach_action(&obs, h));
         m.step(&joint);
     }
@@ -169,8 +169,8 @@ fn the_facing_spot_lies_where_the_kicker_faces() {
     assert!((ahead[1] - (ball.1 - 1.0)).abs() < 1e-5, "{ahead:?}");
     // The support action walks toward the spot it is given.
     assert_ne!(
-        to_action(SUPPORT, &obs, h, SupportSpot::Facing),
-        to_action(SUPPORT, &obs, h, SupportSpot::Ahead)
+        to_action(NetAction::Support, &obs, h, SupportSpot::Facing),
+        to_action(NetAction::Support, &obs, h, SupportSpot::Ahead)
     );
     // The kicker on blue's own side of the ball: both spots ahead.
     let m = staged((-0.4, 0.0, 0.0), (0.5, -1.0, 0.0), (0.0, 0.0));
@@ -195,18 +195,18 @@ fn approach_masks() {
         approach: true,
         ..DecisionConfig::team()
     };
-    assert_eq!(d.actions(), APPROACH + 1);
+    assert_eq!(d.actions(), NetAction::Approach.index() + 1);
     let pass_bit = |o| {
         if naosoccer_proto::pass_receiver(o).is_some() {
             0
         } else {
-            1 << naosoccer_policy::PASS
+            NetAction::Pass.bit()
         }
     };
     assert_eq!(banned_actions(&chaser, true, &d), pass_bit(&chaser));
     assert_eq!(
         banned_actions(&other, false, &d),
-        ROLE_BANNED | 1 << APPROACH | 1 << naosoccer_policy::PASS
+        ROLE_BANNED | NetAction::Approach.bit() | NetAction::Pass.bit()
     );
     d.approach_only = true;
     assert_eq!(
@@ -216,6 +216,6 @@ fn approach_masks() {
     d.chasers = 0;
     assert_eq!(
         banned_actions(&other, false, &d),
-        APPROACH_ONLY_BANNED | 1 << naosoccer_policy::PASS
+        APPROACH_ONLY_BANNED | NetAction::Pass.bit()
     );
 }

@@ -8,14 +8,14 @@ use std::f32::consts::PI;
 use std::path::Path;
 
 use naosoccer_policy::Policy;
-use naosoccer_policy::{LearnedPolicy, PlayConfig, Weights, PASS, SUPPORT};
+use naosoccer_policy::{LearnedPolicy, NetAction, PlayConfig, Weights};
 use naosoccer_proto::{Action, Team, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
 
 /// The shipped seed-1 team given a sixth output whose bias makes `pass`
 /// the greedy choice wherever it is allowed.
 fn pass_loving_team() -> LearnedPolicy {
-    loving_team(PASS)
+    loving_team(NetAction::Pass.index())
 }
 
 /// The shipped seed-1 team given outputs up to `favourite` (`pass`, or
@@ -33,7 +33,7 @@ fn team_loving(last: usize, favourite: usize, chasers: u32) -> LearnedPolicy {
     let mut cfg = PlayConfig::read(&dir.join("config.json")).unwrap();
     let d = cfg.ppo.decision.as_mut().unwrap();
     d.pass = true;
-    d.support = last == SUPPORT;
+    d.support = last == NetAction::Support.index();
     d.chasers = chasers;
     let extra = last + 1 - five_outputs(&dir);
     let five = Weights::read(&dir.join("final.safetensors")).unwrap();
@@ -96,7 +96,7 @@ fn pass_is_chosen_only_where_the_observation_allows_it() {
     assert_eq!(team.act(&obs), Action::Pass);
     // Probabilities with every mask: all on pass.
     let p = team.probabilities_for(std::slice::from_ref(&obs));
-    assert!(p[PASS] > 0.999, "{p:?}");
+    assert!(p[NetAction::Pass.index()] > 0.999, "{p:?}");
     // The receiver behind the kicker: no pass possible, so not chosen.
     let mut team = pass_loving_team();
     let m = staged((-2.5, 0.0));
@@ -104,7 +104,7 @@ fn pass_is_chosen_only_where_the_observation_allows_it() {
     assert_eq!(naosoccer_proto::pass_receiver(&obs), None);
     assert_ne!(team.act(&obs), Action::Pass);
     let p = team.probabilities_for(std::slice::from_ref(&obs));
-    assert!(p[PASS] < 1e-6, "{p:?}");
+    assert!(p[NetAction::Pass.index()] < 1e-6, "{p:?}");
     // A robot far from the ball with a teammate in front: out of reach.
     let mut team = pass_loving_team();
     let m = staged((1.2, 0.2));
@@ -117,7 +117,7 @@ fn pass_is_chosen_only_where_the_observation_allows_it() {
 /// names it as the receiver; the steps are ordinary protocol actions.
 #[test]
 fn support_walks_a_robot_to_where_a_pass_reaches_it() {
-    let mut team = loving_team(SUPPORT);
+    let mut team = loving_team(NetAction::Support.index());
     let mut m = staged((-2.0, 1.5));
     let kicker = m.observe(Team::Blue, 1);
     assert_eq!(naosoccer_proto::pass_receiver(&kicker), None);
@@ -162,7 +162,7 @@ fn support_walks_a_robot_to_where_a_pass_reaches_it() {
 #[test]
 fn roles_leave_walking_and_turning_to_the_chasers() {
     use naosoccer_policy::actions::{banned_actions, is_chaser, ROLE_BANNED, SUPPORT_ONLY_BANNED};
-    let mut team = team_loving(SUPPORT, 0, 1);
+    let mut team = team_loving(NetAction::Support.index(), 0, 1);
     // Blue 1 has the ball at its feet; blue 2 stands 1.9 m from it.
     let m = staged((-2.0, 1.5));
     let chaser = m.observe(Team::Blue, 1);
@@ -177,19 +177,19 @@ fn roles_leave_walking_and_turning_to_the_chasers() {
     assert!(!is_chaser(&m.observe(Team::Blue, 0), 2));
     let p = team.probabilities_for(std::slice::from_ref(&other));
     assert!(p[..3].iter().all(|&x| x < 1e-6), "{p:?}");
-    assert!((p[SUPPORT..].iter().sum::<f32>() + p[4] - 1.0).abs() < 1e-4);
+    assert!((p[NetAction::Support.index()..].iter().sum::<f32>() + p[4] - 1.0).abs() < 1e-4);
     let d = team.decision().unwrap();
     let in_reach = false;
     assert_eq!(
         banned_actions(&other, in_reach, &d),
-        ROLE_BANNED | 1 << PASS
+        ROLE_BANNED | NetAction::Pass.bit()
     );
     // With support only it may not stay either.
     let mut strict = d;
     strict.support_only = true;
     assert_eq!(
         banned_actions(&other, in_reach, &strict),
-        SUPPORT_ONLY_BANNED | 1 << PASS
+        SUPPORT_ONLY_BANNED | NetAction::Pass.bit()
     );
     assert_eq!(
         banned_actions(&chaser, true, &strict) & SUPPORT_ONLY_BANNED,
@@ -198,7 +198,10 @@ fn roles_leave_walking_and_turning_to_the_chasers() {
     // Without roles the same robot may walk.
     let mut free = d;
     free.chasers = 0;
-    assert_eq!(banned_actions(&other, in_reach, &free), 1 << PASS);
+    assert_eq!(
+        banned_actions(&other, in_reach, &free),
+        NetAction::Pass.bit()
+    );
     // The chaser falls: blue 2, the nearest standing robot, chases.
     other.own[1].fallen = true;
     assert!(is_chaser(&other, 1));

@@ -17,7 +17,7 @@
 use naosoccer_policy::actions::{action_count, banned_actions, to_action, SupportSpot};
 use naosoccer_policy::eval::Side;
 use naosoccer_policy::Policy;
-use naosoccer_policy::{DecisionConfig, ObsScale, PolicyError, OBS_DIM, SHOOT};
+use naosoccer_policy::{DecisionConfig, NetAction, ObsScale, PolicyError, OBS_DIM};
 use naosoccer_proto::{
     Action, MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
@@ -290,7 +290,8 @@ impl VecMatches {
             .map_or(SupportSpot::default(), |d| d.support_spot);
         for (slot, acts) in self.slots.iter_mut().zip(actions.chunks_exact(rows)) {
             for (r, &a) in self.robots.iter().zip(acts) {
-                slot.actions[r.index()] = to_action(a as usize, &slot.obs[r.index()], half, spot);
+                let a = NetAction::from_index(a as usize).expect("actions are checked above");
+                slot.actions[r.index()] = to_action(a, &slot.obs[r.index()], half, spot);
             }
         }
         // A trained opponent decides for all matches in one forward pass.
@@ -458,7 +459,7 @@ fn write_rows(shape: &Shape, slot: &Slot, index: usize, obs: &mut [f32], masks: 
             let in_reach = shape.scale.kick.in_reach(o);
             let mut bans = banned_actions(o, in_reach, d);
             if d.mask_shoot && !in_reach {
-                bans |= 1 << SHOOT;
+                bans |= NetAction::Shoot.bit();
             }
             for (a, m) in mask.iter_mut().enumerate() {
                 *m = bans & (1 << a) == 0;

@@ -14,7 +14,7 @@
 //! observations and masks), the learner's choice, [`Decisions::decide`],
 //! [`VecEnv::step`] with [`Decisions::actions`], [`Decisions::observe`].
 
-use naosoccer_policy::actions::{banned_actions, DecisionConfig, Hold};
+use naosoccer_policy::actions::{banned_actions, DecisionConfig, Hold, NetAction};
 
 use crate::env::VecEnv;
 use crate::obs::{ObsScale, OBS_DIM};
@@ -159,7 +159,7 @@ impl<P: Copy> Decisions<P> {
                 a.shoot_ok.push(!self.decision.mask_shoot || in_reach);
                 a.banned.push(banned_actions(o, in_reach, &self.decision));
             } else {
-                self.actions[r] = hold.held(o);
+                self.actions[r] = hold.held(o).index();
             }
         }
         &self.asked
@@ -203,7 +203,8 @@ impl<P: Copy> Decisions<P> {
             self.open_critic[r * cw..(r + 1) * cw]
                 .copy_from_slice(&self.asked.critic_obs[j * cw..(j + 1) * cw]);
             let tick = env.learner_observation(r).tick;
-            self.holds[r].start(actions[j], tick, &self.decision, half);
+            let a = NetAction::from_index(actions[j]).expect("a network output is an action");
+            self.holds[r].start(a, tick, &self.decision, half);
             self.actions[r] = actions[j];
         }
     }

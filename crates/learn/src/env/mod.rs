@@ -25,7 +25,7 @@ mod drills;
 mod opponents;
 pub use drills::{Drill, PassDrills};
 pub use naosoccer_policy::BatchActor;
-use naosoccer_policy::{to_action, SupportSpot};
+use naosoccer_policy::{to_action, NetAction, SupportSpot};
 use opponents::Mix;
 pub use opponents::Opponent;
 
@@ -491,12 +491,13 @@ impl Slot {
         let field = self.m.field();
         let half = [field.half_length, field.half_width];
         let spot = env.support_spot;
+        let net = |i: usize| NetAction::from_index(i).expect("a network output is an action");
         for (k, &p) in env.learners.iter().enumerate() {
-            joint[own + p] = to_action(actions[k], &self.obs[own + p], half, spot);
+            joint[own + p] = to_action(net(actions[k]), &self.obs[own + p], half, spot);
         }
         if let Some(opp) = opp {
             for p in 0..PLAYERS_PER_TEAM {
-                joint[other + p] = to_action(opp[p], &self.obs[other + p], half, spot);
+                joint[other + p] = to_action(net(opp[p]), &self.obs[other + p], half, spot);
             }
         }
         for (i, policy) in self.policies.iter_mut().enumerate() {

@@ -4,8 +4,7 @@
 use naosoccer_proto::{Observation, Tick};
 
 use super::{
-    support_spot, DecisionConfig, SupportSpot, PASS, SHOOT, STAY, SUPPORT, SUPPORT_ARRIVE,
-    SUPPORT_RELEASE_BALL,
+    support_spot, DecisionConfig, NetAction, SupportSpot, SUPPORT_ARRIVE, SUPPORT_RELEASE_BALL,
 };
 
 /// One robot's decision state in the decision-level MDP (`team` preset):
@@ -14,7 +13,7 @@ use super::{
 /// when it decided in training, in process or over the socket.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Hold {
-    action: usize,
+    action: NetAction,
     until: Tick,
     last_tick: Option<Tick>,
     /// A `support` held to its spot ([`DecisionConfig::support_hold`]):
@@ -57,11 +56,11 @@ impl Hold {
 
     /// The action of a robot that does not decide now: what it holds while
     /// free, `stay` while lying or kicking (its action is ignored then).
-    pub fn held(&self, obs: &Observation) -> usize {
+    pub fn held(&self, obs: &Observation) -> NetAction {
         if is_free(obs) {
             self.action
         } else {
-            STAY
+            NetAction::Stay
         }
     }
 
@@ -70,13 +69,19 @@ impl Hold {
     /// `shoot` or `pass` one (the kick then keeps the robot busy), a
     /// `support` with `support_hold` until its robot arrives, the ball
     /// comes near or `support_hold` ticks pass.
-    pub fn start(&mut self, action: usize, tick: Tick, decision: &DecisionConfig, half: [f32; 2]) {
+    pub fn start(
+        &mut self,
+        action: NetAction,
+        tick: Tick,
+        decision: &DecisionConfig,
+        half: [f32; 2],
+    ) {
         self.action = action;
         let persist = u64::from(decision.persist.max(1));
         self.release_from = None;
-        let ticks = if action == SHOOT || action == PASS {
+        let ticks = if action.is_kick() {
             1
-        } else if action == SUPPORT && u64::from(decision.support_hold) > persist {
+        } else if action == NetAction::Support && u64::from(decision.support_hold) > persist {
             self.release_from = Some(tick + persist);
             self.half = half;
             self.spot = decision.support_spot;

@@ -3,10 +3,7 @@
 
 use naosoccer_proto::Observation;
 
-use super::{
-    DecisionConfig, ACTIONS, APPROACH, FORWARD, MASKED_LOGIT, PASS, SHOOT, STAY, TURN_LEFT,
-    TURN_RIGHT,
-};
+use super::{DecisionConfig, NetAction, ACTIONS, MASKED_LOGIT};
 
 /// Whether the robot that received `obs` may `pass` now: the ball is in
 /// kick reach (`in_reach`, from the encoder) and there is a receiver.
@@ -60,11 +57,12 @@ pub(super) fn nearest_standing_teammate(obs: &Observation) -> Option<(f32, usize
 /// The actions a robot that is not one of its team's chasers may not choose
 /// under [`DecisionConfig::chasers`], as bits (`1 << index`): `forward` and
 /// the turns (and `approach`, for a team that has it).
-pub const ROLE_BANNED: u8 = 1 << FORWARD | 1 << TURN_LEFT | 1 << TURN_RIGHT;
+pub const ROLE_BANNED: u8 =
+    NetAction::Forward.bit() | NetAction::TurnLeft.bit() | NetAction::TurnRight.bit();
 
 /// What a robot that does not chase may not choose under
 /// [`DecisionConfig::support_only`]: [`ROLE_BANNED`] and `stay`.
-pub const SUPPORT_ONLY_BANNED: u8 = ROLE_BANNED | 1 << STAY;
+pub const SUPPORT_ONLY_BANNED: u8 = ROLE_BANNED | NetAction::Stay.bit();
 
 /// What no robot may choose under [`DecisionConfig::approach_only`]:
 /// `forward` and the turns, the bits of [`ROLE_BANNED`].
@@ -81,7 +79,7 @@ pub const APPROACH_ONLY_BANNED: u8 = ROLE_BANNED;
 pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> u8 {
     let mut banned = decision.own_goal_guard.map_or(0, |g| g.banned(obs));
     if decision.pass && !pass_possible(obs, in_reach) {
-        banned |= 1 << PASS;
+        banned |= NetAction::Pass.bit();
     }
     if decision.approach_only {
         banned |= APPROACH_ONLY_BANNED;
@@ -93,7 +91,7 @@ pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConf
             ROLE_BANNED
         };
         if decision.approach {
-            banned |= 1 << APPROACH;
+            banned |= NetAction::Approach.bit();
         }
     }
     banned
@@ -108,15 +106,20 @@ pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
 /// The bans of row `i` of `banned` ([`banned_actions`]) for rows of
 /// `actions` actions: a row beyond `banned` may not `pass`.
 pub fn row_bans(banned: &[u8], i: usize, actions: usize) -> u8 {
-    let missing = if actions > PASS { 1 << PASS } else { 0 };
+    let pass = NetAction::Pass;
+    let missing = if actions > pass.index() {
+        pass.bit()
+    } else {
+        0
+    };
     banned.get(i).copied().unwrap_or(missing)
 }
 
 /// Adds [`MASKED_LOGIT`] to the entries of `row` (one row of logits) that
 /// `bans` ([`banned_actions`]) bans.
 pub fn mask_row(row: &mut [f32], bans: u8) {
-    for (a, x) in row.iter_mut().enumerate().take(8) {
-        if bans & (1 << a) != 0 {
+    for (x, a) in row.iter_mut().zip(NetAction::ALL) {
+        if bans & a.bit() != 0 {
             *x += MASKED_LOGIT;
         }
     }
@@ -129,7 +132,7 @@ pub fn action_mask(shoot_ok: &[bool], banned: &[u8], actions: usize) -> Vec<f32>
     let mut m = vec![0.0; shoot_ok.len() * actions];
     for (i, (&ok, row)) in shoot_ok.iter().zip(m.chunks_exact_mut(actions)).enumerate() {
         if !ok {
-            row[SHOOT] = MASKED_LOGIT;
+            row[NetAction::Shoot.index()] = MASKED_LOGIT;
         }
         mask_row(row, row_bans(banned, i, actions));
     }

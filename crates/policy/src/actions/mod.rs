@@ -28,61 +28,108 @@ pub use steps::{
     SUPPORT_FACE_CONE, SUPPORT_RELEASE_BALL, SUPPORT_SIDE, SUPPORT_WALK_CONE,
 };
 
-/// The paper's discrete actions, in `proto::Action::from_index` order:
-/// forward, turn left, turn right, shoot, stay. A team trained with
-/// [`DecisionConfig::pass`] has a sixth, `pass` ([`PASS`]), one trained
-/// with [`DecisionConfig::support`] a seventh, `support` ([`SUPPORT`]), and
-/// one trained with [`DecisionConfig::approach`] an eighth, `approach`
-/// ([`APPROACH`]).
+/// One output of a team's network: the protocol's actions, in
+/// `proto::Action::from_index` order (forward, turn left, turn right,
+/// shoot, stay, pass), then the shipped teams' two walking steps, which are
+/// not protocol actions: the team's policy turns them, every tick, into the
+/// `forward`, turn or `stay` that walks the robot ([`to_action`]).
+///
+/// A network has the first [`ACTIONS`] (the paper's five), or more: a team
+/// trained with [`DecisionConfig::pass`] has `Pass`, one trained with
+/// [`DecisionConfig::support`] `Support` too, one trained with
+/// [`DecisionConfig::approach`] `Approach` too ([`DecisionConfig::actions`]).
+/// Its output `i` is the action whose [`NetAction::index`] is `i`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+pub enum NetAction {
+    /// `forward`; also what a hold that never decided holds.
+    #[default]
+    Forward,
+    TurnLeft,
+    TurnRight,
+    Shoot,
+    Stay,
+    /// The protocol's `pass` (1.3): a kick at the receiver's feet.
+    Pass,
+    /// A walk to the robot's support spot ([`support_action`]).
+    Support,
+    /// A walk round behind the ball onto the line to the opponent goal,
+    /// then into the ball ([`approach_action`]).
+    Approach,
+}
+
+impl NetAction {
+    /// Every network action, by index.
+    pub const ALL: [NetAction; MAX_ACTIONS] = [
+        NetAction::Forward,
+        NetAction::TurnLeft,
+        NetAction::TurnRight,
+        NetAction::Shoot,
+        NetAction::Stay,
+        NetAction::Pass,
+        NetAction::Support,
+        NetAction::Approach,
+    ];
+
+    /// The network output this action is.
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
+    /// The action of network output `index`, if there is one.
+    pub fn from_index(index: usize) -> Option<NetAction> {
+        NetAction::ALL.get(index).copied()
+    }
+
+    /// This action's bit in a ban set (`1 << index`, [`banned_actions`]).
+    pub const fn bit(self) -> u8 {
+        1 << self as u8
+    }
+
+    /// The name the docs and the Python package use.
+    pub const fn name(self) -> &'static str {
+        match self {
+            NetAction::Forward => "forward",
+            NetAction::TurnLeft => "turn_left",
+            NetAction::TurnRight => "turn_right",
+            NetAction::Shoot => "shoot",
+            NetAction::Stay => "stay",
+            NetAction::Pass => "pass",
+            NetAction::Support => "support",
+            NetAction::Approach => "approach",
+        }
+    }
+
+    /// Whether this is a kick (`shoot` or `pass`).
+    pub const fn is_kick(self) -> bool {
+        matches!(self, NetAction::Shoot | NetAction::Pass)
+    }
+}
+
+/// The paper's five actions: the networks of teams without `pass`,
+/// `support` or `approach` have this many outputs.
 pub const ACTIONS: usize = 5;
 
 /// The most actions a network has (the paper's five, `pass`, `support`
 /// and `approach`).
 pub const MAX_ACTIONS: usize = 8;
 
-/// Index of `pass`, the sixth action of teams trained with it.
-pub const PASS: usize = 5;
-
-/// Index of `support`, the seventh action of teams trained with it. It is
-/// not a protocol action: the team's policy turns it, every tick, into the
-/// `forward`, turn or `stay` that walks the robot to its support spot
-/// ([`support_action`]).
-pub const SUPPORT: usize = 6;
-
-/// Index of `approach`, the eighth action of teams trained with it. Like
-/// `support` it is not a protocol action: the team's policy turns it, every
-/// tick, into the `forward` or turn that walks the robot round behind the
-/// ball, onto the line from the ball to the opponent goal, and then into
-/// the ball facing that way ([`approach_action`]).
-pub const APPROACH: usize = 7;
-
-/// The actions' names, by index: the protocol's five, then `pass`,
-/// `support` and `approach`.
-pub const ACTION_NAMES: [&str; MAX_ACTIONS] = [
-    "forward",
-    "turn_left",
-    "turn_right",
-    "shoot",
-    "stay",
-    "pass",
-    "support",
-    "approach",
-];
-
-/// Index of `forward`.
-pub const FORWARD: usize = 0;
-
-/// Index of `turn_left`.
-pub const TURN_LEFT: usize = 1;
-/// Index of `turn_right`.
-pub const TURN_RIGHT: usize = 2;
-/// Index of `shoot` among the actions.
-pub const SHOOT: usize = 3;
-/// Index of `stay`.
-pub const STAY: usize = 4;
+/// The actions' names, by index ([`NetAction::name`]).
+pub const ACTION_NAMES: [&str; MAX_ACTIONS] = {
+    let mut names = [""; MAX_ACTIONS];
+    let mut i = 0;
+    while i < MAX_ACTIONS {
+        names[i] = NetAction::ALL[i].name();
+        i += 1;
+    }
+    names
+};
 
 /// A logit this low makes an action impossible (its probability underflows to 0).
 pub const MASKED_LOGIT: f32 = -1e9;
+
+fn every_tick() -> u32 {
+    1
+}
 
 /// The decision-level MDP (`team` presets). A setting this build does not
 /// know is refused rather than ignored: a team trained with it would
@@ -92,8 +139,12 @@ pub const MASKED_LOGIT: f32 = -1e9;
 pub struct DecisionConfig {
     /// Ticks a movement decision (`forward`, turns, `stay`) lasts before the
     /// robot decides again (a `shoot` lasts as long as the kick keeps it busy).
+    /// Left out (as a Python `decision` dict may): 1, every tick.
+    #[serde(default = "every_tick")]
     pub persist: u32,
-    /// `shoot` is impossible while the ball is out of kick reach.
+    /// `shoot` is impossible while the ball is out of kick reach. Left out:
+    /// `false`.
+    #[serde(default)]
     pub mask_shoot: bool,
     /// The robots have a sixth action, `pass` (protocol 1.3), possible only
     /// while the ball is in kick reach and `proto::pass_receiver` names a
@@ -203,9 +254,9 @@ impl DecisionConfig {
     /// with `pass` and `support`, 8 with `approach` too.
     pub fn actions(&self) -> usize {
         match (self.pass, self.support, self.approach) {
-            (_, true, true) => APPROACH + 1,
-            (_, true, false) => SUPPORT + 1,
-            (true, false, _) => PASS + 1,
+            (_, true, true) => NetAction::Approach.index() + 1,
+            (_, true, false) => NetAction::Support.index() + 1,
+            (true, false, _) => NetAction::Pass.index() + 1,
             (false, false, _) => ACTIONS,
         }
     }
@@ -257,6 +308,36 @@ pub fn argmax(v: &[f32]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn network_actions_are_the_protocols_then_the_walking_steps() {
+        for (i, a) in NetAction::ALL.into_iter().enumerate() {
+            assert_eq!(a.index(), i);
+            assert_eq!(NetAction::from_index(i), Some(a));
+            assert_eq!(a.bit(), 1 << i);
+            assert_eq!(ACTION_NAMES[i], a.name());
+        }
+        assert_eq!(NetAction::from_index(MAX_ACTIONS), None);
+        // The first six are the protocol's, in its order and by its names.
+        for (a, p) in NetAction::ALL.into_iter().zip(naosoccer_proto::Action::ALL) {
+            assert_eq!(a.index(), p.index());
+            assert_eq!(a.name(), p.name());
+        }
+        assert!(NetAction::Shoot.is_kick() && NetAction::Pass.is_kick());
+        assert!(!NetAction::Support.is_kick());
+    }
+
+    #[test]
+    fn a_decision_setting_left_out_takes_its_default() {
+        let d: DecisionConfig = serde_json::from_str(r#"{"pass": true}"#).unwrap();
+        assert_eq!(
+            (d.persist, d.mask_shoot, d.pass, d.chasers),
+            (1, false, true, 0)
+        );
+        assert_eq!(d.actions(), 6);
+        let err = serde_json::from_str::<DecisionConfig>(r#"{"persits": 3}"#).unwrap_err();
+        assert!(err.to_string().contains("persits"), "{err}");
+    }
 
     #[test]
     fn argmax_takes_the_first_of_ties() {

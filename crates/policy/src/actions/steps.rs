@@ -5,7 +5,7 @@ use naosoccer_proto::{Action, Observation};
 use naosoccer_referee::rules::wrap_angle;
 
 use super::masks::nearest_standing_teammate;
-use super::{SupportSpot, APPROACH, SUPPORT};
+use super::{NetAction, SupportSpot};
 
 /// A support spot lies this far ahead of the ball, toward the opponent
 /// goal (m): the default of the reward's `support_ahead`.
@@ -44,16 +44,20 @@ pub const APPROACH_LATERAL: f32 = 0.06;
 /// ...but never for an angle error below this (rad).
 pub const APPROACH_MIN_CONE: f32 = 0.12;
 
-/// The protocol action a team's action index `index` stands for in the
-/// state `obs`, on a pitch of half length and half width `half`: the index
-/// itself for the protocol's actions, the step toward the support spot
-/// (placed as `spot` says) for [`SUPPORT`], the step of [`approach_action`]
-/// for [`APPROACH`], `stay` for anything else.
-pub fn to_action(index: usize, obs: &Observation, half: [f32; 2], spot: SupportSpot) -> Action {
-    match index {
-        SUPPORT => support_action(obs, half, spot),
-        APPROACH => approach_action(obs, half),
-        _ => Action::from_index(index).unwrap_or(Action::Stay),
+/// The protocol action the network action `a` stands for in the state
+/// `obs`, on a pitch of half length and half width `half`: itself for the
+/// protocol's actions, the step toward the support spot (placed as `spot`
+/// says) for `support`, the step of [`approach_action`] for `approach`.
+pub fn to_action(a: NetAction, obs: &Observation, half: [f32; 2], spot: SupportSpot) -> Action {
+    match a {
+        NetAction::Forward => Action::Forward,
+        NetAction::TurnLeft => Action::TurnLeft,
+        NetAction::TurnRight => Action::TurnRight,
+        NetAction::Shoot => Action::Shoot,
+        NetAction::Stay => Action::Stay,
+        NetAction::Pass => Action::Pass,
+        NetAction::Support => support_action(obs, half, spot),
+        NetAction::Approach => approach_action(obs, half),
     }
 }
 

@@ -29,7 +29,7 @@ use naosoccer_proto::{Action, Observation, Tick};
 use crate::actions::MASKED_LOGIT;
 use crate::actions::{
     action_count, argmax, banned_actions, mask_row, row_bans, sample, sample_uniform, to_action,
-    DecisionConfig, Hold, SupportSpot, ACTIONS, SHOOT,
+    DecisionConfig, Hold, NetAction, SupportSpot, ACTIONS,
 };
 use crate::mlp::{Activation, Mlp, Weights};
 use crate::obs::{ObsScale, OBS_DIM};
@@ -240,7 +240,7 @@ impl LearnedPolicy {
                         let h = self.holds.entry(key).or_default();
                         let d = h.must_decide(o);
                         if !d {
-                            out[i] = h.held(o);
+                            out[i] = h.held(o).index();
                         }
                         d
                     }
@@ -267,6 +267,7 @@ impl LearnedPolicy {
             for (&(at, key, tick), &a) in deciding.iter().zip(&acts) {
                 out[at] = a;
                 if let Some(d) = self.decision {
+                    let a = NetAction::from_index(a).expect("a network output is an action");
                     self.holds.entry(key).or_default().start(a, tick, &d, half);
                 }
             }
@@ -338,7 +339,8 @@ impl LearnedPolicy {
                     // (DQN teams have the paper's five actions.)
                     let allowed = if masked { ACTIONS - 1 } else { ACTIONS };
                     let k = ((u / epsilon * allowed as f32) as usize).min(allowed - 1);
-                    *a = if masked && k >= SHOOT { k + 1 } else { k };
+                    let shoot = NetAction::Shoot.index();
+                    *a = if masked && k >= shoot { k + 1 } else { k };
                 }
             }
         }
@@ -356,7 +358,7 @@ impl LearnedPolicy {
                 for (i, o) in out.iter_mut().enumerate() {
                     let row = &mut self.out[i * na..(i + 1) * na];
                     if !shoot_ok(i) {
-                        row[SHOOT] += MASKED_LOGIT;
+                        row[NetAction::Shoot.index()] += MASKED_LOGIT;
                     }
                     mask_row(row, row_bans(&self.banned, i, na));
                     *o = if sample_it {
@@ -385,7 +387,7 @@ impl LearnedPolicy {
                     for (j, &i) in idx.iter().enumerate() {
                         let row = &mut self.out[j * na..(j + 1) * na];
                         if !shoot_ok(i) {
-                            row[SHOOT] = f32::NEG_INFINITY;
+                            row[NetAction::Shoot.index()] = f32::NEG_INFINITY;
                         }
                         out[i] = argmax(row);
                     }
@@ -434,7 +436,7 @@ impl LearnedPolicy {
         let masks = self.masks_shoot();
         for (i, row) in p.chunks_exact_mut(self.actions).enumerate() {
             if masks && obs[i * OBS_DIM + IN_REACH_FEATURE] <= 0.5 {
-                row[SHOOT] += MASKED_LOGIT;
+                row[NetAction::Shoot.index()] += MASKED_LOGIT;
             }
             if !banned.is_empty() {
                 mask_row(row, row_bans(banned, i, self.actions));
@@ -450,14 +452,17 @@ impl LearnedPolicy {
         self.actions
     }
 
-    /// The protocol action that action index `index` (from
+    /// The protocol action that network output `index` (from
     /// [`LearnedPolicy::act_matches`]) stands for in the state `obs`: a
     /// `support` becomes the step toward the robot's support spot
     /// ([`crate::support_action`]), an `approach` the step of
-    /// [`crate::approach_action`].
+    /// [`crate::approach_action`]; an index past the actions, `stay`.
     pub fn action(&self, index: usize, obs: &Observation) -> Action {
+        let Some(a) = NetAction::from_index(index) else {
+            return Action::Stay;
+        };
         to_action(
-            index,
+            a,
             obs,
             [self.scale.half_length, self.scale.half_width],
             self.decision
