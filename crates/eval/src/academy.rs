@@ -15,13 +15,12 @@
 
 use std::collections::BTreeMap;
 
-use crate::Policy;
+use naosoccer_policy::{Policy, PolicyError};
 use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Ending, Judge, Match, MatchConfig, Scenario};
 use serde_json::{json, Value};
 
 use crate::eval::{eval_match_seed, for_each_slot, Rate, Side};
-use crate::PolicyError;
 
 /// Which starts of a drill are played: starts `0..starts` under `seed`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,7 +37,7 @@ impl DrillPlan {
 
     /// The colour the team under test plays in start `i`.
     pub fn own(&self, i: usize) -> Team {
-        if i.is_multiple_of(2) {
+        if i % 2 == 0 {
             Team::Blue
         } else {
             Team::Red

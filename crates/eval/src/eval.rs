@@ -18,16 +18,13 @@
 //! of blocks merge ([`EvalReport::merge`]) into the report of the whole run,
 //! statistics and all, computed here and nowhere else.
 
-use crate::{Policy, PolicyKind};
+use naosoccer_policy::{LearnedPolicy, Policy, PolicyError, PolicyKind};
 use naosoccer_proto::{
     Action, Event, MatchStats, Observation, PerTeam, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_referee::{Match, MatchConfig};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
-
-use crate::learned::LearnedPolicy;
-use crate::PolicyError;
 
 /// One side of an evaluation.
 pub enum Side {
@@ -39,7 +36,7 @@ impl Side {
     /// `scripted` | `scripted:KEY=VAL,...` | `scripted:FILE.toml` | `random`
     /// | `idle` | `ppo:DIR` | `dqn:DIR` (and the other trained-team specs).
     pub fn parse(spec: &str) -> Result<Side, PolicyError> {
-        if !crate::is_builtin_spec(spec) {
+        if !naosoccer_policy::is_builtin_spec(spec) {
             return Ok(Side::Learned(Box::new(LearnedPolicy::load(spec)?)));
         }
         spec.parse::<PolicyKind>()
