@@ -3,7 +3,16 @@
 //! `naosoccer-policy` (built-in teams, and trained teams without libtorch),
 //! every match through `referee::Match`.
 //!
+//! - [`run`]: the one runner of batches of matches: seeds, sides and
+//!   scenarios in, each match stepped to its end (threads, one forward pass
+//!   a tick for a trained team), per-match results out; one match alone,
+//!   watched tick by tick (the CLI's `match`).
 //! - [`eval`]: many matches between two teams; Table I with 95% CIs.
+//!   - `eval/seeds.rs`: evaluation and training seeds.
+//!   - `eval/stats.rs`: means with Student-t intervals, Wilson rates, a
+//!     team's row.
+//!   - `eval/table.rs`, `eval/report.rs`: the table; the report, its JSON,
+//!     reading back and merging blocks.
 //! - [`league`]: a round robin of evaluations and a Bradley–Terry rating.
 //! - [`academy`]: drills (scenarios with end conditions), many starts each,
 //!   and their success rates.
@@ -14,3 +23,4 @@
 pub mod academy;
 pub mod eval;
 pub mod league;
+pub mod run;

@@ -9,8 +9,9 @@
 //! ([`episode_seed`]) have it clear, so an evaluation never replays a
 //! match a training run saw.
 //!
-//! Matches run side by side; a trained team decides for all its robots in all
-//! matches in one forward pass per tick.
+//! The matches are played by the crate's one runner ([`crate::run`]): side
+//! by side, a trained team deciding for all its robots in all matches in
+//! one forward pass a tick.
 //!
 //! An evaluation can be played in blocks (`--first-match`): match `i` has
 //! the same seed and sides in a block as in the whole run, by its global
@@ -18,12 +19,12 @@
 //! of blocks merge ([`EvalReport::merge`]) into the report of the whole run,
 //! statistics and all, computed here and nowhere else.
 
-use naosoccer_policy::{LearnedPolicy, Policy, PolicyError, PolicyKind};
-use naosoccer_proto::{
-    Action, Event, MatchStats, Observation, PerTeam, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
-};
-use naosoccer_referee::{Match, MatchConfig};
+use naosoccer_policy::PolicyError;
+use naosoccer_proto::{MatchStats, PerTeam, Score, Team};
+use naosoccer_referee::MatchConfig;
 use serde::{Deserialize, Serialize};
+
+use crate::run::{Batch, Fixture, Played};
 
 mod report;
 mod seeds;
@@ -37,27 +38,8 @@ pub use seeds::{episode_seed, eval_match_seed, legacy_episode_seed, SeedScheme, 
 pub use stats::{summarise, t95, Estimate, Rate, Record, TeamSummary};
 pub use table::format_table;
 
-/// One side of an evaluation.
-pub enum Side {
-    Builtin(PolicyKind),
-    Learned(Box<LearnedPolicy>),
-}
-
-impl Side {
-    /// `scripted` | `scripted:KEY=VAL,...` | `scripted:FILE.toml` | `random`
-    /// | `idle` | `ppo:DIR` | `dqn:DIR` (and the other trained-team specs).
-    pub fn parse(spec: &str) -> Result<Side, PolicyError> {
-        if !naosoccer_policy::is_builtin_spec(spec) {
-            return Ok(Side::Learned(Box::new(LearnedPolicy::load(spec)?)));
-        }
-        spec.parse::<PolicyKind>()
-            .map(Side::Builtin)
-            .map_err(|e| PolicyError::Spec {
-                spec: spec.to_string(),
-                reason: format!("{e}; or ppo:DIR, dqn:DIR"),
-            })
-    }
-}
+/// One side of an evaluation (the runner's).
+pub use crate::run::Side;
 
 /// How an evaluation is played: matches `first_match .. first_match +
 /// matches` of the evaluation that `seed`, `both_sides` and `seeds` define.
@@ -114,6 +96,19 @@ pub struct MatchResult {
 pub const LONG_PASS_METRES: f32 = 1.0;
 
 impl MatchResult {
+    /// An evaluation's match as the runner played it.
+    fn of(p: &Played) -> MatchResult {
+        MatchResult {
+            index: p.index,
+            seed: p.seed,
+            score: p.score,
+            stats: p.stats,
+            long_passes: p.long_passes,
+            state_hash: p.state_hash,
+            swapped: p.swapped,
+        }
+    }
+
     /// The colour the first team (`first`: true) or the second played.
     pub fn team_of(&self, first: bool) -> Team {
         if first != self.swapped {
@@ -184,18 +179,6 @@ pub struct MatchRecord {
     /// The match's final state hash (the same on every machine of one build).
     pub state_hash: u64,
 }
-
-struct Slot {
-    m: Match,
-    obs: Vec<Observation>,
-    policies: Vec<Option<Box<dyn Policy>>>,
-    decided: [Action; ROBOTS],
-    /// By colour, so far.
-    long_passes: PerTeam<u32>,
-    swapped: bool,
-    index: usize,
-}
-
 /// Plays the matches of `plan` between `first` and `second`, in index
 /// order: match `i` (a global index) has seed `plan.match_seed(i)`, and
 /// `first` plays blue unless `plan.swapped(i)`.
@@ -220,141 +203,15 @@ pub fn play_matches_until(
     threads: usize,
     stop: &dyn Fn() -> bool,
 ) -> Result<Option<Vec<MatchResult>>, PolicyError> {
-    let mut slots = Vec::with_capacity(plan.matches);
-    for i in plan.indices() {
-        let m = Match::new(cfg, plan.match_seed(i))?;
-        let s = m.seed();
-        let swapped = plan.swapped(i);
-        let policies = RobotId::all()
-            .map(|r| {
-                let side = if (r.team() == Team::Blue) != swapped {
-                    &*first
-                } else {
-                    &*second
-                };
-                match side {
-                    Side::Builtin(k) => Some(k.build(s, r)),
-                    Side::Learned(_) => None,
-                }
-            })
-            .collect();
-        let mut slot = Slot {
-            obs: (0..ROBOTS)
-                .map(|_| naosoccer_referee::blank_observation())
-                .collect(),
-            policies,
-            decided: [Action::Stay; ROBOTS],
-            long_passes: PerTeam::default(),
-            swapped,
-            index: i,
-            m,
-        };
-        observe_all(&mut slot);
-        slots.push(slot);
+    let fixtures = plan.indices().map(|i| Fixture {
+        index: i,
+        seed: plan.match_seed(i),
+        swapped: plan.swapped(i),
+        scenario: None,
+    });
+    let mut batch = Batch::new(cfg, first, second, fixtures)?;
+    if !batch.play(threads, stop) {
+        return Ok(None);
     }
-    let mut acts = Vec::new();
-    while slots.iter().any(|s| !s.m.is_finished()) {
-        if stop() {
-            return Ok(None);
-        }
-        for (is_first, side) in [(true, &mut *first), (false, &mut *second)] {
-            let Side::Learned(policy) = side else {
-                continue;
-            };
-            let live: Vec<usize> = (0..slots.len())
-                .filter(|&i| !slots[i].m.is_finished())
-                .collect();
-            let n = live.len() * PLAYERS_PER_TEAM;
-            acts.resize(n, 0usize);
-            // Each match's team as one policy playing that match would see
-            // it: draws keyed by (match seed, team, player, tick), and the
-            // decision-level MDP's per-robot holds kept by the policy.
-            let teams: Vec<(u64, &[Observation])> = live
-                .iter()
-                .map(|&i| {
-                    let base = team_of(&slots[i], is_first).index() * PLAYERS_PER_TEAM;
-                    (
-                        slots[i].m.seed(),
-                        &slots[i].obs[base..base + PLAYERS_PER_TEAM],
-                    )
-                })
-                .collect();
-            policy.act_matches(&teams, &mut acts);
-            for (j, &i) in live.iter().enumerate() {
-                let team = team_of(&slots[i], is_first);
-                let base = team.index() * PLAYERS_PER_TEAM;
-                for p in 0..PLAYERS_PER_TEAM {
-                    let a = policy.action(acts[j * PLAYERS_PER_TEAM + p], &slots[i].obs[base + p]);
-                    slots[i].decided[team.index() * PLAYERS_PER_TEAM + p] = a;
-                }
-            }
-        }
-        for_each_slot(&mut slots, threads, step_slot);
-    }
-    Ok(Some(
-        slots
-            .iter()
-            .map(|s| MatchResult {
-                index: s.index,
-                seed: s.m.seed(),
-                score: s.m.score(),
-                stats: s.m.stats(),
-                long_passes: s.long_passes,
-                state_hash: s.m.state_hash(),
-                swapped: s.swapped,
-            })
-            .collect(),
-    ))
-}
-
-fn team_of(slot: &Slot, first: bool) -> Team {
-    if first != slot.swapped {
-        Team::Blue
-    } else {
-        Team::Red
-    }
-}
-
-fn observe_all(slot: &mut Slot) {
-    for r in RobotId::all() {
-        slot.m
-            .observe_into(r.team(), r.player(), &mut slot.obs[r.index()]);
-    }
-}
-
-/// Runs `step` on every slot, the slots split into up to `threads` runs
-/// of neighbours on scoped threads. Each slot holds its own match, so the
-/// thread count changes no result. Evaluations and the academy step their
-/// batches with it.
-pub(crate) fn for_each_slot<S: Send>(slots: &mut [S], threads: usize, step: fn(&mut S)) {
-    let threads = threads.clamp(1, slots.len().max(1));
-    let per = slots.len().div_ceil(threads).max(1);
-    if threads == 1 {
-        slots.iter_mut().for_each(step);
-    } else {
-        std::thread::scope(|s| {
-            for chunk in slots.chunks_mut(per) {
-                s.spawn(move || chunk.iter_mut().for_each(step));
-            }
-        });
-    }
-}
-
-fn step_slot(slot: &mut Slot) {
-    if slot.m.is_finished() {
-        return;
-    }
-    for (i, p) in slot.policies.iter_mut().enumerate() {
-        if let Some(p) = p {
-            slot.decided[i] = p.act(&slot.obs[i]);
-        }
-    }
-    for e in slot.m.step(&slot.decided) {
-        if let Event::Pass { from, distance, .. } = *e {
-            if distance >= LONG_PASS_METRES {
-                *slot.long_passes.get_mut(from.team()) += 1;
-            }
-        }
-    }
-    observe_all(slot);
+    Ok(Some(batch.results().iter().map(MatchResult::of).collect()))
 }

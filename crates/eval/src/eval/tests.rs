@@ -1,5 +1,8 @@
 //! Seeds, intervals, both sides, long passes, blocks and merges.
 
+use naosoccer_policy::PolicyKind;
+use naosoccer_proto::{Action, Event, PerTeam, RobotId, ROBOTS};
+use naosoccer_referee::{Match, MatchConfig};
 use serde_json::json;
 
 use super::*;
