@@ -8,8 +8,8 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use naosoccer::interrupt;
-use naosoccer_policy::academy::{self, DrillPlan, DrillReport};
-use naosoccer_policy::eval::Side;
+use naosoccer_eval::academy::{self, DrillPlan, DrillReport};
+use naosoccer_eval::eval::Side;
 use naosoccer_referee::{MatchConfig, Scenario};
 
 use super::eval::match_config;

@@ -1,5 +1,5 @@
 //! `naosoccer eval`: many matches between two teams, built-in or trained
-//! (through `naosoccer-policy`, no libtorch). Wall-clock time is measured
+//! (through `naosoccer-eval`, no libtorch). Wall-clock time is measured
 //! here, at the edge; the results never depend on it.
 
 use std::path::PathBuf;
@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use naosoccer::interrupt;
-use naosoccer_policy::eval::{play_matches_until, EvalPlan, EvalReport, SeedScheme, Side};
+use naosoccer_eval::eval::{play_matches_until, EvalPlan, EvalReport, SeedScheme, Side};
 use naosoccer_referee::MatchConfig;
 
 /// The match configuration: a TOML file or the defaults (assets/match.toml),
@@ -249,7 +249,7 @@ fn merge(files: &[PathBuf]) -> anyhow::Result<EvalReport> {
 
 /// `--scenario`: the starts of one drill, as `academy` plays them.
 fn scenario(a: &EvalArgs, path: &std::path::Path) -> anyhow::Result<()> {
-    use naosoccer_policy::academy::{self, DrillPlan};
+    use naosoccer_eval::academy::{self, DrillPlan};
     anyhow::ensure!(a.matches > 0, "--matches must be at least 1");
     let blue = a.blue.clone().context("--blue is required")?;
     let cfg = match_config(a.config.as_ref(), None)?;

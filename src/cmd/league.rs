@@ -1,6 +1,6 @@
 //! `naosoccer league`: a round robin of evaluations between teams, built-in
 //! or trained, and a Bradley–Terry rating fitted on all the results
-//! (`naosoccer_policy::league`). The matches are played by the evaluation's
+//! (`naosoccer_eval::league`). The matches are played by the evaluation's
 //! runner (`eval::play_matches`), in blocks so that a progress bar can
 //! follow; a match's result does not depend on the block it was played in.
 
@@ -10,8 +10,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use naosoccer_policy::eval::{play_matches, EvalPlan, EvalReport, SeedScheme, Side};
-use naosoccer_policy::league::{check_team_list, pairings, League};
+use naosoccer_eval::eval::{play_matches, EvalPlan, EvalReport, SeedScheme, Side};
+use naosoccer_eval::league::{check_team_list, pairings, League};
 
 use super::eval::match_config;
 

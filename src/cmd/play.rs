@@ -7,9 +7,9 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use clap::Args;
 use naosoccer::live::{LiveServer, MatchStream, Pace};
-use naosoccer::runner::{self, MatchOutcome};
+use naosoccer_eval::run::{self, Fixture, MatchOutcome};
 use naosoccer_policy::PolicyKind;
-use naosoccer_proto::{Action, Event, RobotId, Team, TeamStats, Tick, ROBOTS};
+use naosoccer_proto::{Action, Event, Team, TeamStats, Tick, ROBOTS};
 
 use super::team::TeamSpec;
 use naosoccer_record::{MatchMeta, Recorder, RecorderOptions, RecordingSummary};
@@ -149,25 +149,22 @@ pub fn run(mut args: MatchArgs) -> anyhow::Result<()> {
         Some(s) => Match::with_scenario(cfg, seed, s, own),
         None => Match::new(cfg, seed),
     };
+    // The match as it starts: the configuration and the scenario are
+    // checked here, before anything is played or recorded.
     let start = new_match(&cfg, args.seed)?;
-    let judge = scenario.as_ref().map(|s| s.judge(&cfg, own, start.tick()));
     let mut ending: Option<Ending> = None;
-    let policies = RobotId::all()
-        .map(|robot| match robot.team() {
-            Team::Blue => blue.build(args.seed, robot),
-            Team::Red => red.build(args.seed, robot),
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
+    let mut first = blue.side()?;
+    let mut second = red.side()?;
+    let fixture = Fixture {
+        scenario: scenario.as_ref().map(|s| (s, own)),
+        ..Fixture::kick_off(args.seed)
+    };
     let show_progress = std::io::stdout().is_terminal();
     let mut last_shown = Tick::ZERO;
     // From here on Ctrl-C ends the match after the current tick and keeps it.
     naosoccer::interrupt::watch()?;
     let mut recording = match &args.record {
-        Some(path) => Some(MatchRecording::start(
-            path,
-            &args,
-            &new_match(&cfg, args.seed)?,
-        )?),
+        Some(path) => Some(MatchRecording::start(path, &args, &start)?),
         None => None,
     };
     let mut live = match &args.live {
@@ -181,10 +178,11 @@ pub fn run(mut args: MatchArgs) -> anyhow::Result<()> {
     };
     // Ctrl-C before the end: the match's length in ticks, for the report.
     let mut cut_short: Option<u64> = None;
-    let outcome = runner::run_until(start, policies, |m, actions, events| {
-        if let Some(j) = &judge {
-            ending = j.check(m, events);
-        }
+    let outcome = run::play_one(&cfg, &mut first, &mut second, fixture, |t| {
+        let (m, actions, events) = (t.m, t.actions, t.events);
+        // A scenario's end is the runner's to find; it is the match's last
+        // tick.
+        ending = t.ending;
         // Ctrl-C: this tick is the last; the recording is finished with
         // it (its final statistics say the match was not completed).
         let stop = naosoccer::interrupt::interrupted() && !m.is_finished();
@@ -213,12 +211,12 @@ pub fn run(mut args: MatchArgs) -> anyhow::Result<()> {
                 let _ = writeln!(err);
             }
         }
-        if stop || ending.is_some() {
+        if stop {
             std::ops::ControlFlow::Break(())
         } else {
             std::ops::ControlFlow::Continue(())
         }
-    });
+    })?;
 
     if let Some(l) = live {
         l.server.finish(naosoccer::live::LINGER);
@@ -462,7 +460,7 @@ pub fn bench_sim(args: BenchSimArgs) -> anyhow::Result<()> {
     let floor = start.elapsed().as_secs_f64();
 
     let scripted = PolicyKind::Scripted;
-    let outcome = runner::play_match(&cfg, args.seed, &scripted, &scripted, |_| {})?;
+    let outcome = run::play_match(&cfg, args.seed, &scripted, &scripted, |_| {})?;
     let full = outcome.wall_seconds;
 
     println!(
@@ -483,29 +481,34 @@ pub fn bench_sim(args: BenchSimArgs) -> anyhow::Result<()> {
         );
     };
     // The same match again, recorded to MCAP in memory (what `--record`
-    // and the server add).
+    // and the server add); `m` is its start, the recording's first state.
     let m = Match::new(&cfg, args.seed)?;
     let meta = MatchMeta::of(&m, &scripted.to_string(), &scripted.to_string(), "match");
-    let start = Instant::now();
     // The recorder's own time (start, every tick, finish), apart from the
     // match's: the write time of the recording.
     let mut writing = Instant::now();
     let mut rec = Some(Recorder::in_memory(&meta, &m, RecorderOptions::default())?);
     let mut write_time = writing.elapsed();
+    let opening = write_time.as_secs_f64();
     let mut bytes = 0;
-    let policies = runner::build_policies(args.seed, &scripted, &scripted);
-    let recorded = runner::run_to_end_with(m, policies, |m, actions, events| {
+    let recorded = run::play_match(&cfg, args.seed, &scripted, &scripted, |t| {
         if let Some(r) = &mut rec {
             writing = Instant::now();
-            r.tick(m, actions, events).expect("recording to memory");
-            if m.is_finished() {
-                let (_, sink) = rec.take().unwrap().finish(m).expect("finishing in memory");
+            r.tick(t.m, t.actions, t.events)
+                .expect("recording to memory");
+            if t.m.is_finished() {
+                let (_, sink) = rec
+                    .take()
+                    .unwrap()
+                    .finish(t.m)
+                    .expect("finishing in memory");
                 bytes = sink.into_bytes().map_or(0, |b| b.len());
             }
             write_time += writing.elapsed();
         }
-    });
-    let with_recording = start.elapsed().as_secs_f64();
+    })?;
+    // The match with its recording, the recorder's start included.
+    let with_recording = opening + recorded.wall_seconds;
     anyhow::ensure!(
         recorded.state_hash == outcome.state_hash,
         "recording changed the match (state hash {:016x} vs {:016x})",

@@ -5,8 +5,8 @@
 //! `naosoccer match` and `naosoccer client` both take it.
 
 use naosoccer_client::TeamPolicy;
-use naosoccer_policy::{Policy, PolicyKind};
-use naosoccer_proto::RobotId;
+use naosoccer_eval::run::Side;
+use naosoccer_policy::{LearnedPolicy, Policy, PolicyKind};
 
 /// A parsed team spec. A trained team has been loaded once already, so a
 /// bad path or a mismatched checkpoint fails before any match starts.
@@ -29,12 +29,18 @@ impl TeamSpec {
         Ok(TeamSpec::Learned(spec.to_owned()))
     }
 
-    /// The policy of `robot` in a match of seed `seed`: the same rule the
-    /// server-side clients follow, so in-process and socket matches agree.
-    pub fn build(&self, seed: u64, robot: RobotId) -> anyhow::Result<Box<dyn Policy>> {
+    /// The team as the in-process runner plays it (`naosoccer_eval::run`):
+    /// built-in robots built per robot from the match seed, a trained team
+    /// keyed by it, as the clients play them, so in-process and socket
+    /// matches agree.
+    pub fn side(&self) -> anyhow::Result<Side> {
+        use anyhow::Context;
         match self {
-            TeamSpec::Builtin(k) => Ok(k.build(seed, robot)),
-            TeamSpec::Learned(spec) => load_learned(spec, seed),
+            TeamSpec::Builtin(k) => Ok(Side::Builtin(*k)),
+            TeamSpec::Learned(spec) => {
+                let p = LearnedPolicy::load(spec).with_context(|| format!("loading {spec}"))?;
+                Ok(Side::Learned(Box::new(p)))
+            }
         }
     }
 

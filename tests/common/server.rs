@@ -78,7 +78,7 @@ pub fn in_process(
     blue: PolicyKind,
     red: PolicyKind,
 ) -> (MatchStats, Score, u64, String) {
-    let out = naosoccer::runner::play_match(cfg, seed, &blue, &red, |_| {}).unwrap();
+    let out = naosoccer_eval::run::play_match(cfg, seed, &blue, &red, |_| {}).unwrap();
     let score = Score {
         blue: out.score.blue,
         red: out.score.red,

@@ -10,11 +10,11 @@ use std::process::Command;
 
 use common::naosoccer;
 use common::server::*;
-use naosoccer::runner::{run_to_end_with, MatchOutcome};
 use naosoccer_client::robot::{run_team, TeamRun};
-use naosoccer_policy::{Policy, PolicyKind};
+use naosoccer_eval::run::{play_one, Fixture, MatchOutcome, Side};
+use naosoccer_policy::{LearnedPolicy, PolicyKind};
 use naosoccer_proto::msg::{EndReason, MatchEnd, MatchId, Player};
-use naosoccer_proto::{RobotId, Team, Tick};
+use naosoccer_proto::{Team, Tick};
 use naosoccer_referee::{Match, MatchConfig};
 
 /// A shipped trained team (a sampling PPO team: its draws are keyed by the
@@ -23,23 +23,22 @@ fn shipped_run() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/policies/ppo-paper-seed1")
 }
 
-/// The match in process: `spec`'s trained team blue, the scripted team red;
-/// `on_tick` sees the match after every tick.
+/// The match in process (`naosoccer match`'s runner): `spec`'s trained
+/// team blue, the scripted team red; `on_tick` sees the match after every
+/// tick.
 fn trained_blue_in_process(
     spec: &str,
     cfg: &MatchConfig,
     seed: u64,
     mut on_tick: impl FnMut(&Match),
 ) -> MatchOutcome {
-    let policies: Vec<Box<dyn Policy>> = RobotId::all()
-        .map(|robot| match robot.team() {
-            Team::Blue => naosoccer_policy::load_policy_for_match(spec, seed).unwrap(),
-            Team::Red => PolicyKind::Scripted.build(seed, robot),
-        })
-        .collect();
-    run_to_end_with(Match::new(cfg, seed).unwrap(), policies, |m, _, _| {
-        on_tick(m)
+    let mut blue = Side::Learned(Box::new(LearnedPolicy::load(spec).unwrap()));
+    let mut red = Side::Builtin(PolicyKind::Scripted);
+    play_one(cfg, &mut blue, &mut red, Fixture::kick_off(seed), |t| {
+        on_tick(t.m);
+        std::ops::ControlFlow::Continue(())
     })
+    .unwrap()
 }
 
 /// The match a client saw end is the in-process one, bit for bit.

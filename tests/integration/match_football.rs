@@ -3,7 +3,7 @@
 //! controlled by one team or the other, passes, falls), and a match must be
 //! repeatable from its seed.
 
-use naosoccer::runner::{play_match, MatchOutcome};
+use naosoccer_eval::run::{play_match, MatchOutcome};
 use naosoccer_policy::PolicyKind;
 use naosoccer_referee::MatchConfig;
 

@@ -34,7 +34,6 @@
 //! Every tick also passes through [`Audit::tick`] with the tick's events, the
 //! place for per-tick checks over the event stream.
 
-use naosoccer::runner::build_policies;
 use naosoccer_policy::{Policy, PolicyKind};
 use naosoccer_proto::{Action, Event, Observation, RobotId, SetPlayKind, Team, ROBOTS};
 use naosoccer_referee::{blank_observation, Match, MatchConfig};
@@ -673,7 +672,13 @@ impl Watch {
 
 /// Plays one whole match of `blue` against `red` under the audit.
 fn audit_match(a: &mut Audit, parts: &[Part], seed: u64, blue: &PolicyKind, red: &PolicyKind) {
-    audit_match_of(a, parts, seed, build_policies(seed, blue, red));
+    let policies = RobotId::all()
+        .map(|robot| match robot.team() {
+            Team::Blue => blue.build(seed, robot),
+            Team::Red => red.build(seed, robot),
+        })
+        .collect();
+    audit_match_of(a, parts, seed, policies);
 }
 
 /// Plays one whole match with these policies (robot index order).

@@ -51,14 +51,14 @@ async fn eight_robot_clients_match_the_in_process_runner() {
     // The same match in process (`naosoccer match`'s runner), summing each
     // robot's `Match::rewards` as it goes.
     let mut returns = [[0.0f32; PLAYERS_PER_TEAM]; 2];
-    let out = naosoccer::runner::play_match_with(
+    let out = naosoccer_eval::run::play_match(
         &match_cfg,
         42,
         &PolicyKind::Scripted,
         &PolicyKind::Random,
-        |m, _, _| {
+        |t| {
             for team in [Team::Blue, Team::Red] {
-                for (ret, r) in returns[team.index()].iter_mut().zip(m.rewards(team)) {
+                for (ret, r) in returns[team.index()].iter_mut().zip(t.m.rewards(team)) {
                     *ret += r;
                 }
             }

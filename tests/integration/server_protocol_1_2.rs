@@ -122,12 +122,12 @@ async fn events_arrive_with_their_tick_and_equal_the_in_process_match() {
     received.extend(end.events.iter().cloned());
 
     let mut expected: Vec<Event> = Vec::new();
-    let out = naosoccer::runner::play_match_with(
+    let out = naosoccer_eval::run::play_match(
         &match_cfg,
         42,
         &PolicyKind::Scripted,
         &PolicyKind::Scripted,
-        |_, _, events| expected.extend_from_slice(events),
+        |t| expected.extend_from_slice(t.events),
     )
     .unwrap();
     assert_eq!(end.tick, Tick::new(out.ticks));
@@ -366,7 +366,7 @@ async fn a_level_of_the_ladder_fills_the_empty_slots() {
         }
     };
     let five: PolicyKind = "scripted:5".parse().unwrap();
-    let out = naosoccer::runner::play_match_with(&match_cfg, 9, &one, &five, |_, _, _| {}).unwrap();
+    let out = naosoccer_eval::run::play_match(&match_cfg, 9, &one, &five, |_| {}).unwrap();
     assert_eq!(end.state_hash, format!("{:016x}", out.state_hash));
     // A fill the protocol does not know is refused as an invalid argument.
     assert!("scripted:6".parse::<Fill>().is_err());

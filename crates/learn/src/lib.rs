@@ -1,7 +1,8 @@
 //! Learning: team policies for `referee::Match`, trained with PPO and DQN
 //! on tch. The only crate that links libtorch; playing a trained team needs
-//! only `naosoccer-policy` (re-exported here as [`obs`], [`eval`] and the
-//! [`LearnedPolicy`] the trainer's opponents use). The reward is the
+//! only `naosoccer-policy` (re-exported here as [`obs`] and the
+//! [`LearnedPolicy`] the trainer's opponents use), and evaluating one only
+//! `naosoccer-eval` (re-exported as [`eval`]). The reward is the
 //! referee's (`Match::rewards`): its weights are part of the match
 //! configuration.
 //!
@@ -73,7 +74,8 @@ pub mod warm_start;
 
 pub use config::{Algo, OpponentSpec, TrainConfig};
 pub use error::LearnError;
-pub use naosoccer_policy::{eval, obs};
+pub use naosoccer_eval::eval;
+pub use naosoccer_policy::obs;
 pub use naosoccer_policy::{load_policy, load_policy_for_match, ActMode, LearnedPolicy};
 pub use obs::{ObsScale, OBS_DIM, OBS_VERSION, OBS_VERSION_LATEST};
 pub use train::train;

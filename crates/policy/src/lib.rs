@@ -11,23 +11,20 @@
 //!   safetensors checkpoints the trainer writes.
 //! - [`learned`]: a trained team as the client's `Policy`
 //!   ([`load_policy`]), and as a batch player of many matches at once.
-//! - [`eval`]: many matches between two teams; Table I with 95% CIs.
-//! - [`league`]: a round robin of evaluations and a Bradley–Terry rating.
-//! - [`academy`]: drills (scenarios with end conditions), many starts each,
-//!   and their success rates.
+//! - [`guard`]: the own-goal guard a trained team may play with.
+//! - [`export`]: a PPO actor trained elsewhere (Python) written as a team
+//!   directory that `ppo:DIR` plays.
 //!
-//! crates/learn (tch) trains the networks and depends on this crate; this
-//! crate never depends on it, so every command that only plays links no
-//! libtorch.
+//! Many matches (evaluations, leagues, the academy) are crates/eval's, which
+//! plays these players. crates/learn (tch) trains the networks and depends
+//! on this crate; this crate never depends on it, so every command that
+//! only plays links no libtorch.
 
-pub mod academy;
 pub mod actions;
 pub mod bots;
 mod error;
-pub mod eval;
 pub mod export;
 pub mod guard;
-pub mod league;
 pub mod learned;
 pub mod mlp;
 pub mod obs;

@@ -14,8 +14,8 @@
 //! slots, so a slot's first match after `reset(s)` is `naosoccer match
 //! --seed s+i`.
 
+use naosoccer_eval::eval::Side;
 use naosoccer_policy::actions::{action_count, banned_actions, to_action, SupportSpot};
-use naosoccer_policy::eval::Side;
 use naosoccer_policy::Policy;
 use naosoccer_policy::{DecisionConfig, NetAction, ObsScale, PolicyError, OBS_DIM};
 use naosoccer_proto::{

@@ -95,7 +95,7 @@ pub struct VecEnv {
     ticks: u64,
 }
 
-pub use naosoccer_policy::eval::{episode_seed, legacy_episode_seed};
+pub use naosoccer_eval::eval::{episode_seed, legacy_episode_seed};
 
 impl VecEnv {
     pub fn new(

@@ -126,8 +126,9 @@ pub fn load_policy(spec: &str) -> Result<Box<dyn Policy>, PolicyError> {
 }
 
 /// As [`load_policy`], for a match of seed `match_seed`: the policy the
-/// in-process runner, the server's fill and `naosoccer client` build for
-/// each match.
+/// server's fill and `naosoccer client` build for each match (in process,
+/// one `LearnedPolicy` plays a whole side of many matches, keyed by their
+/// seeds: the same actions).
 pub fn load_policy_for_match(spec: &str, match_seed: u64) -> Result<Box<dyn Policy>, PolicyError> {
     let mut p = LearnedPolicy::load(spec)?;
     p.set_match_seed(match_seed);

@@ -8,20 +8,21 @@
 //! starts and red in the odd ones: `eval --scenario FILE --matches N` and
 //! `academy --starts N` play the same starts of a drill.
 //!
-//! The loop is the evaluation's (crate::eval): starts side by side, a
-//! trained team deciding for all its robots in all starts in one forward
-//! pass a tick, built-in robots stepped on threads; it differs in how a
-//! start ends (its scenario's judge, not the match clock).
+//! The starts are played by the crate's one runner ([`crate::run`]), as an
+//! evaluation's matches are: side by side, a trained team deciding for all
+//! its robots in all starts in one forward pass a tick, built-in robots
+//! stepped on threads; a start ends at its scenario's first end condition
+//! that holds (its judge), not with the match clock.
 
 use std::collections::BTreeMap;
 
-use crate::Policy;
-use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
-use naosoccer_referee::{Ending, Judge, Match, MatchConfig, Scenario};
+use naosoccer_policy::PolicyError;
+use naosoccer_proto::Team;
+use naosoccer_referee::{Ending, MatchConfig, Scenario};
 use serde_json::{json, Value};
 
-use crate::eval::{eval_match_seed, for_each_slot, Rate, Side};
-use crate::PolicyError;
+use crate::eval::{eval_match_seed, Rate, Side};
+use crate::run::{Batch, Fixture};
 
 /// Which starts of a drill are played: starts `0..starts` under `seed`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,7 +39,7 @@ impl DrillPlan {
 
     /// The colour the team under test plays in start `i`.
     pub fn own(&self, i: usize) -> Team {
-        if i.is_multiple_of(2) {
+        if i % 2 == 0 {
             Team::Blue
         } else {
             Team::Red
@@ -57,17 +58,6 @@ pub struct StartResult {
     pub state_hash: u64,
 }
 
-struct Slot {
-    m: Match,
-    judge: Judge,
-    obs: Vec<Observation>,
-    policies: Vec<Option<Box<dyn Policy>>>,
-    decided: [Action; ROBOTS],
-    index: usize,
-    ending: Option<Ending>,
-    events: Vec<Event>,
-}
-
 /// Plays the starts of `plan` of `scenario`: `own` is the team under test,
 /// `opponent` the other side. `stop` is asked before every tick; once it
 /// says yes the starts are dropped and the answer is `None` (Ctrl-C).
@@ -80,119 +70,31 @@ pub fn play_drill(
     threads: usize,
     stop: &dyn Fn() -> bool,
 ) -> Result<Option<Vec<StartResult>>, PolicyError> {
-    let mut slots = Vec::with_capacity(plan.starts);
-    for i in 0..plan.starts {
-        let colour = plan.own(i);
-        let m = Match::with_scenario(cfg, plan.start_seed(i), scenario, colour)?;
-        let seed = m.seed();
-        let policies = RobotId::all()
-            .map(|r| {
-                let side = if r.team() == colour {
-                    &*own
-                } else {
-                    &*opponent
-                };
-                match side {
-                    Side::Builtin(k) => Some(k.build(seed, r)),
-                    Side::Learned(_) => None,
-                }
-            })
-            .collect();
-        let mut slot = Slot {
-            judge: scenario.judge(cfg, colour, m.tick()),
-            obs: (0..ROBOTS)
-                .map(|_| naosoccer_referee::blank_observation())
-                .collect(),
-            policies,
-            decided: [Action::Stay; ROBOTS],
-            index: i,
-            ending: None,
-            events: Vec::with_capacity(16),
-            m,
-        };
-        observe_all(&mut slot);
-        slots.push(slot);
-    }
-    while slots.iter().any(|s| s.ending.is_none()) {
-        if stop() {
-            return Ok(None);
-        }
-        for (is_own, side) in [(true, &mut *own), (false, &mut *opponent)] {
-            let Side::Learned(policy) = side else {
-                continue;
-            };
-            let live: Vec<usize> = (0..slots.len())
-                .filter(|&i| slots[i].ending.is_none())
-                .collect();
-            let mut acts = vec![0usize; live.len() * PLAYERS_PER_TEAM];
-            let teams: Vec<(u64, &[Observation])> = live
-                .iter()
-                .map(|&i| {
-                    let base = team_of(&slots[i], is_own).index() * PLAYERS_PER_TEAM;
-                    (
-                        slots[i].m.seed(),
-                        &slots[i].obs[base..base + PLAYERS_PER_TEAM],
-                    )
-                })
-                .collect();
-            policy.act_matches(&teams, &mut acts);
-            for (j, &i) in live.iter().enumerate() {
-                let base = team_of(&slots[i], is_own).index() * PLAYERS_PER_TEAM;
-                for p in 0..PLAYERS_PER_TEAM {
-                    let a = policy.action(acts[j * PLAYERS_PER_TEAM + p], &slots[i].obs[base + p]);
-                    slots[i].decided[base + p] = a;
-                }
-            }
-        }
-        for_each_slot(&mut slots, threads, step_slot);
+    // The team under test is the runner's first side, and its colour the
+    // scenario's own team's.
+    let fixtures = (0..plan.starts).map(|i| Fixture {
+        index: i,
+        seed: plan.start_seed(i),
+        swapped: plan.own(i) == Team::Red,
+        scenario: Some((scenario, plan.own(i))),
+    });
+    let mut batch = Batch::new(cfg, own, opponent, fixtures)?;
+    if !batch.play(threads, stop) {
+        return Ok(None);
     }
     Ok(Some(
-        slots
+        batch
+            .results()
             .iter()
-            .map(|s| StartResult {
-                index: s.index,
-                seed: s.m.seed(),
-                own: s.judge.own(),
-                ending: s.ending.expect("every start ended"),
-                state_hash: s.m.state_hash(),
+            .map(|p| StartResult {
+                index: p.index,
+                seed: p.seed,
+                own: plan.own(p.index),
+                ending: p.ending.expect("every start ended"),
+                state_hash: p.state_hash,
             })
             .collect(),
     ))
-}
-
-fn team_of(slot: &Slot, own: bool) -> Team {
-    if own {
-        slot.judge.own()
-    } else {
-        slot.judge.own().other()
-    }
-}
-
-fn observe_all(slot: &mut Slot) {
-    for r in RobotId::all() {
-        slot.m
-            .observe_into(r.team(), r.player(), &mut slot.obs[r.index()]);
-    }
-}
-
-fn step_slot(slot: &mut Slot) {
-    if slot.ending.is_some() {
-        return;
-    }
-    for (i, p) in slot.policies.iter_mut().enumerate() {
-        if let Some(p) = p {
-            slot.decided[i] = p.act(&slot.obs[i]);
-        }
-    }
-    // `step` lends its events out of the match; a copy into a reused
-    // buffer lets the judge read the match and the events together.
-    slot.events.clear();
-    let events = slot.m.step(&slot.decided);
-    slot.events.extend_from_slice(events);
-    slot.ending = slot.judge.check(&slot.m, &slot.events);
-    if slot.ending.is_none() {
-        observe_all(slot);
-    }
 }
 
 /// A drill's results: the academy table's row.

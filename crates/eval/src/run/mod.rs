@@ -1,0 +1,383 @@
+//! The one runner of batches of matches: every match this crate plays (an
+//! evaluation's, a league's, a drill's starts) and the CLI's in-process
+//! `match` and `bench sim` are played here.
+//!
+//! A batch is a set of matches ([`Fixture`]s) between two [`Side`]s, the
+//! first and the second, each a built-in team or a trained one. The
+//! players are built one way: a built-in team gets one policy per robot,
+//! `PolicyKind::build(match seed, robot)`, as the server and the robot
+//! clients build them; a trained team decides for all its robots in all the
+//! batch's matches in one forward pass a tick, its draws and decision state
+//! keyed by (match seed, team, player), so that it plays every match as it
+//! would alone, in process or over the socket.
+//!
+//! A match starts from the kick-off, or from a scenario with its own team
+//! playing a given colour; it ends with the match clock, or at the
+//! scenario's first end condition that holds (its [`Judge`]). The matches
+//! are stepped side by side, split among threads; each holds its own match,
+//! so the thread count changes no result.
+//!
+//! [`Batch`] steps many matches; [`play_one`] plays one, watched tick by
+//! tick (a recording, a live view, Ctrl-C), and reports its
+//! [`MatchOutcome`].
+
+use naosoccer_policy::{LearnedPolicy, Policy, PolicyError, PolicyKind};
+use naosoccer_proto::{
+    Action, Event, MatchStats, Observation, PerTeam, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
+};
+use naosoccer_referee::{Ending, Judge, Match, MatchConfig, Scenario};
+
+use crate::eval::LONG_PASS_METRES;
+
+mod one;
+#[cfg(test)]
+mod tests;
+
+pub use one::{play_match, play_one, MatchOutcome};
+
+/// One side of a batch of matches (of an evaluation, a drill): a built-in
+/// team or a trained one.
+pub enum Side {
+    Builtin(PolicyKind),
+    Learned(Box<LearnedPolicy>),
+}
+
+impl Side {
+    /// `scripted` | `scripted:KEY=VAL,...` | `scripted:FILE.toml` | `random`
+    /// | `idle` | `ppo:DIR` | `dqn:DIR` (and the other trained-team specs).
+    pub fn parse(spec: &str) -> Result<Side, PolicyError> {
+        if !naosoccer_policy::is_builtin_spec(spec) {
+            return Ok(Side::Learned(Box::new(LearnedPolicy::load(spec)?)));
+        }
+        spec.parse::<PolicyKind>()
+            .map(Side::Builtin)
+            .map_err(|e| PolicyError::Spec {
+                spec: spec.to_string(),
+                reason: format!("{e}; or ppo:DIR, dqn:DIR"),
+            })
+    }
+}
+
+/// One match of a batch.
+#[derive(Debug, Clone, Copy)]
+pub struct Fixture<'a> {
+    /// Reported back with its result (an evaluation's global match index,
+    /// a drill's start).
+    pub index: usize,
+    pub seed: u64,
+    /// The first side plays red.
+    pub swapped: bool,
+    /// Start from this scenario, its own team playing this colour, instead
+    /// of the kick-off; the match ends at the scenario's first end
+    /// condition that holds.
+    pub scenario: Option<(&'a Scenario, Team)>,
+}
+
+impl Fixture<'_> {
+    /// A whole match from the kick-off, the first side blue.
+    pub fn kick_off(seed: u64) -> Fixture<'static> {
+        Fixture {
+            index: 0,
+            seed,
+            swapped: false,
+            scenario: None,
+        }
+    }
+}
+
+/// A match of a batch once it ended (or as far as it went).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Played {
+    /// The fixture's.
+    pub index: usize,
+    pub seed: u64,
+    pub swapped: bool,
+    /// Control ticks played.
+    pub ticks: u64,
+    /// Game time played, seconds.
+    pub sim_seconds: f64,
+    /// By colour.
+    pub score: Score,
+    pub stats: MatchStats,
+    /// `Match::state_hash` when it ended: equal for equal matches on one
+    /// build.
+    pub state_hash: u64,
+    /// Referee events over the match.
+    pub events: u64,
+    /// By colour: passes of at least [`LONG_PASS_METRES`].
+    pub long_passes: PerTeam<u32>,
+    /// How a scenario's match ended (`None` without a scenario).
+    pub ending: Option<Ending>,
+}
+
+/// A match's last tick, as a watcher sees it.
+#[derive(Clone, Copy)]
+pub struct Ticked<'a> {
+    /// The match after the tick.
+    pub m: &'a Match,
+    /// The actions applied, in robot index order (blue 0..=3, red 0..=3).
+    pub actions: &'a [Action; ROBOTS],
+    /// The tick's referee events.
+    pub events: &'a [Event],
+    /// A scenario's end, from the tick it came on.
+    pub ending: Option<Ending>,
+}
+
+struct Slot {
+    m: Match,
+    judge: Option<Judge>,
+    index: usize,
+    swapped: bool,
+    obs: Vec<Observation>,
+    /// The built-in robots' policies (`None`: a trained side's robot).
+    policies: Vec<Option<Box<dyn Policy>>>,
+    decided: [Action; ROBOTS],
+    /// The last tick's.
+    events: Vec<Event>,
+    event_count: u64,
+    long_passes: PerTeam<u32>,
+    ending: Option<Ending>,
+    over: bool,
+}
+
+impl Slot {
+    /// The colour the first side (`first`: true) or the second plays.
+    fn team_of(&self, first: bool) -> Team {
+        if first != self.swapped {
+            Team::Blue
+        } else {
+            Team::Red
+        }
+    }
+
+    fn observe_all(&mut self) {
+        for r in RobotId::all() {
+            self.m
+                .observe_into(r.team(), r.player(), &mut self.obs[r.index()]);
+        }
+    }
+
+    fn played(&self) -> Played {
+        Played {
+            index: self.index,
+            seed: self.m.seed(),
+            swapped: self.swapped,
+            ticks: self.m.tick().get(),
+            sim_seconds: self.m.sim_seconds(),
+            score: self.m.score(),
+            stats: self.m.stats(),
+            state_hash: self.m.state_hash(),
+            events: self.event_count,
+            long_passes: self.long_passes,
+            ending: self.ending,
+        }
+    }
+}
+
+/// Matches between two sides, stepped together.
+pub struct Batch<'s> {
+    first: &'s mut Side,
+    second: &'s mut Side,
+    slots: Vec<Slot>,
+    acts: Vec<usize>,
+}
+
+impl<'s> Batch<'s> {
+    /// The matches of `fixtures`, at their start, with their players.
+    pub fn new<'f>(
+        cfg: &MatchConfig,
+        first: &'s mut Side,
+        second: &'s mut Side,
+        fixtures: impl IntoIterator<Item = Fixture<'f>>,
+    ) -> Result<Batch<'s>, PolicyError> {
+        let mut slots = Vec::new();
+        for f in fixtures {
+            let m = match f.scenario {
+                Some((s, own)) => Match::with_scenario(cfg, f.seed, s, own)?,
+                None => Match::new(cfg, f.seed)?,
+            };
+            let seed = m.seed();
+            let policies = RobotId::all()
+                .map(|r| {
+                    let side = if (r.team() == Team::Blue) != f.swapped {
+                        &*first
+                    } else {
+                        &*second
+                    };
+                    match side {
+                        Side::Builtin(k) => Some(k.build(seed, r)),
+                        Side::Learned(_) => None,
+                    }
+                })
+                .collect();
+            let mut slot = Slot {
+                judge: f.scenario.map(|(s, own)| s.judge(cfg, own, m.tick())),
+                index: f.index,
+                swapped: f.swapped,
+                obs: (0..ROBOTS)
+                    .map(|_| naosoccer_referee::blank_observation())
+                    .collect(),
+                policies,
+                decided: [Action::Stay; ROBOTS],
+                events: Vec::with_capacity(16),
+                event_count: 0,
+                long_passes: PerTeam::default(),
+                ending: None,
+                over: false,
+                m,
+            };
+            slot.observe_all();
+            slots.push(slot);
+        }
+        Ok(Batch {
+            first,
+            second,
+            slots,
+            acts: Vec::new(),
+        })
+    }
+
+    /// Whether every match has ended.
+    pub fn is_over(&self) -> bool {
+        self.slots.iter().all(|s| s.over)
+    }
+
+    /// Plays every match to its end, on up to `threads` threads, asking
+    /// `stop` before every tick: once it says yes, play stops there and
+    /// the answer is false (Ctrl-C).
+    pub fn play(&mut self, threads: usize, stop: &dyn Fn() -> bool) -> bool {
+        while !self.is_over() {
+            if stop() {
+                return false;
+            }
+            self.step(threads);
+        }
+        true
+    }
+
+    /// One control tick of every match that has not ended: each trained
+    /// side decides for its robots in all of them at once, then the
+    /// matches step, on up to `threads` threads.
+    pub fn step(&mut self, threads: usize) {
+        let Batch {
+            first,
+            second,
+            slots,
+            acts,
+        } = self;
+        for (is_first, side) in [(true, &mut **first), (false, &mut **second)] {
+            let Side::Learned(policy) = side else {
+                continue;
+            };
+            let live: Vec<usize> = (0..slots.len()).filter(|&i| !slots[i].over).collect();
+            acts.resize(live.len() * PLAYERS_PER_TEAM, 0usize);
+            // Each match's team as one policy playing that match would see
+            // it: draws keyed by (match seed, team, player, tick), and the
+            // decision-level MDP's per-robot holds kept by the policy.
+            let teams: Vec<(u64, &[Observation])> = live
+                .iter()
+                .map(|&i| {
+                    let base = slots[i].team_of(is_first).index() * PLAYERS_PER_TEAM;
+                    (
+                        slots[i].m.seed(),
+                        &slots[i].obs[base..base + PLAYERS_PER_TEAM],
+                    )
+                })
+                .collect();
+            policy.act_matches(&teams, acts);
+            for (j, &i) in live.iter().enumerate() {
+                let base = slots[i].team_of(is_first).index() * PLAYERS_PER_TEAM;
+                for p in 0..PLAYERS_PER_TEAM {
+                    let a = policy.action(acts[j * PLAYERS_PER_TEAM + p], &slots[i].obs[base + p]);
+                    slots[i].decided[base + p] = a;
+                }
+            }
+        }
+        for_each_slot(slots, threads, step_slot);
+    }
+
+    /// The number of matches.
+    pub fn len(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// Whether the batch holds no match.
+    pub fn is_empty(&self) -> bool {
+        self.slots.is_empty()
+    }
+
+    /// Match `i` (in fixture order) after its last tick.
+    pub fn ticked(&self, i: usize) -> Ticked<'_> {
+        let s = &self.slots[i];
+        Ticked {
+            m: &s.m,
+            actions: &s.decided,
+            events: &s.events,
+            ending: s.ending,
+        }
+    }
+
+    /// Match `i` (in fixture order) as far as it went.
+    pub fn played(&self, i: usize) -> Played {
+        self.slots[i].played()
+    }
+
+    /// Every match as far as it went, in fixture order.
+    pub fn results(&self) -> Vec<Played> {
+        self.slots.iter().map(Slot::played).collect()
+    }
+}
+
+/// Runs `step` on every slot, the slots split into up to `threads` runs
+/// of neighbours on scoped threads. Each slot holds its own match, so the
+/// thread count changes no result.
+fn for_each_slot<S: Send>(slots: &mut [S], threads: usize, step: fn(&mut S)) {
+    let threads = threads.clamp(1, slots.len().max(1));
+    let per = slots.len().div_ceil(threads).max(1);
+    if threads == 1 {
+        slots.iter_mut().for_each(step);
+    } else {
+        std::thread::scope(|s| {
+            for chunk in slots.chunks_mut(per) {
+                s.spawn(move || chunk.iter_mut().for_each(step));
+            }
+        });
+    }
+}
+
+/// One tick of a match that has not ended: the built-in robots decide, the
+/// match steps, and its end (the clock, or a scenario's end condition) is
+/// checked.
+fn step_slot(slot: &mut Slot) {
+    if slot.over {
+        return;
+    }
+    for (i, p) in slot.policies.iter_mut().enumerate() {
+        if let Some(p) = p {
+            slot.decided[i] = p.act(&slot.obs[i]);
+        }
+    }
+    // `step` lends its events out of the match; a copy into a reused
+    // buffer lets the judge and a watcher read the match and the events
+    // together.
+    slot.events.clear();
+    slot.events.extend_from_slice(slot.m.step(&slot.decided));
+    slot.event_count += slot.events.len() as u64;
+    for e in &slot.events {
+        if let Event::Pass { from, distance, .. } = *e {
+            if distance >= LONG_PASS_METRES {
+                *slot.long_passes.get_mut(from.team()) += 1;
+            }
+        }
+    }
+    match &slot.judge {
+        Some(judge) => {
+            slot.ending = judge.check(&slot.m, &slot.events);
+            slot.over = slot.ending.is_some();
+        }
+        None => slot.over = slot.m.is_finished(),
+    }
+    if !slot.over {
+        slot.observe_all();
+    }
+}
