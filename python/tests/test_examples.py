@@ -49,3 +49,24 @@ def test_bench_env_vector(binary):
     pytest.importorskip("naosoccer._native", reason="the native extension is not built (scripts/wheel --in-place)")
     text = run(binary, "bench_env.py", "--vector", "--num-matches", "2", "--seconds", "0.5", "--minutes", "0.1")
     assert "match ticks/s" in text and "matches ended" in text
+
+
+def test_cleanrl_ppo(binary, tmp_path):
+    pytest.importorskip("torch")
+    pytest.importorskip("naosoccer._native", reason="the native extension is not built (scripts/wheel --in-place)")
+    out = tmp_path / "team"
+    text = run(
+        binary,
+        "examples/cleanrl_ppo.py",
+        "--seconds", "2",
+        "--num-matches", "2",
+        "--num-steps", "16",
+        "--minutes", "0.1",
+        "--out", str(out),
+        "--eval-matches", "1",
+        "--eval-minutes", "0.2",
+        "--eval-against", "random",
+    )
+    assert "match ticks" in text and "vs random" in text
+    # The exported team is in the shipped format: config.json and weights.
+    assert (out / "config.json").is_file() and (out / "final.safetensors").is_file()
