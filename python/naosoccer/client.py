@@ -9,9 +9,10 @@ reply, and :meth:`Client.recv` returns them first, in order.
 
 from __future__ import annotations
 
+import os
 import socket
 from collections import deque
-from typing import Any, Deque, Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Any, Deque, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 from . import protocol
 from .errors import NaoSoccerError, ProtocolError
@@ -163,9 +164,17 @@ class Client:
         fill: Optional[str] = None,
         start_players: Optional[int] = None,
         deadline_ms: Optional[int] = None,
+        scenario: Optional[Union[str, "os.PathLike[str]"]] = None,
+        scenario_team: Optional[str] = None,
     ) -> Dict[str, Any]:
-        """Creates a match (admin token); returns its ``MatchInfo``."""
+        """Creates a match (admin token); returns its ``MatchInfo``.
+
+        ``scenario`` (protocol 1.5) starts it from a scenario: a path or the
+        file's TOML text (see :func:`naosoccer.protocol.scenario_text`);
+        ``scenario_team`` is the colour its own team plays (the server's
+        default: blue)."""
         msg: Dict[str, Any] = {"type": "create_match", "token": token}
+        text = protocol.scenario_text(scenario) if scenario is not None else None
         for key, value in (
             ("seed", seed),
             ("minutes", minutes),
@@ -173,6 +182,8 @@ class Client:
             ("fill", fill),
             ("start_players", start_players),
             ("deadline_ms", deadline_ms),
+            ("scenario", text),
+            ("scenario_team", scenario_team),
         ):
             if value is not None:
                 msg[key] = value
@@ -184,6 +195,26 @@ class Client:
         reason ``ended`` first."""
         msg = {"type": "end_match", "token": token, "match_id": int(match_id)}
         return self.request(msg, expect="match_ended")["info"]
+
+    def set_state(
+        self,
+        token: str,
+        match_id: int,
+        *,
+        ball: Optional[Dict[str, float]] = None,
+        robots: Optional[Sequence[Dict[str, Any]]] = None,
+    ) -> int:
+        """Moves the ball and robots of a match before its next tick (admin
+        token; protocol 1.5), world coordinates: ``ball`` as
+        ``{"x", "y", "vx", "vy"}``, ``robots`` as ``{"robot", "x", "y",
+        "heading", "fallen"}`` (docs/PROTOCOL.md, ``set_state``). Returns the
+        tick that is then played from the new state."""
+        msg: Dict[str, Any] = {"type": "set_state", "token": token, "match_id": int(match_id)}
+        if ball is not None:
+            msg["ball"] = dict(ball)
+        if robots:
+            msg["robots"] = [dict(r) for r in robots]
+        return int(self.request(msg, expect="state_set")["tick"])
 
     def list_matches(self) -> List[Dict[str, Any]]:
         return self.request({"type": "list_matches"}, expect="match_list")["matches"]
@@ -282,5 +313,6 @@ _KNOWN_SERVER_TYPES = frozenset(
         "left",
         "pong",
         "match_ended",
+        "state_set",
     }
 )

@@ -5,7 +5,8 @@
 from __future__ import annotations
 
 import functools
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+import os
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 from gymnasium import spaces
@@ -66,6 +67,17 @@ class NaoSoccerParallelEnv(ParallelEnv):
     pausing for a gradient update does not have ticks played without it. A
     client that disconnects frees the match at once (its robots then stand).
 
+    ``scenario`` (protocol 1.5): every match this env creates starts from
+    this scenario (docs/SCENARIOS.md), a path or the file's TOML text (see
+    :func:`naosoccer.protocol.scenario_text`), with the env's ``team`` as the
+    scenario's own team, drawn from the match's seed; the episode ends when
+    the scenario's play ends (terminated), and the final ``infos`` carry
+    ``scenario``, how it ended (``match_end``'s). The robots the file does not
+    list are out of play: their observations hold them at their parking
+    spots and their actions are ignored. The opponents play ``opponent``
+    (not the file's ``opponent``). It needs the admin token (a private server
+    has it).
+
     ``opponent``: ``"scripted"`` (the server's built-in team),
     ``"scripted:1"`` ... ``"scripted:5"`` (the ladder of built-in teams,
     weakest first; ``"scripted:3"`` is ``"scripted"``), ``"idle"``
@@ -96,6 +108,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
         reward_weights: Optional[RewardWeights] = None,
         on_match: Optional[Callable[[int], None]] = None,
         timeout: float = 120.0,
+        scenario: Optional[Union[str, "os.PathLike[str]"]] = None,
     ) -> None:
         if team not in protocol.TEAMS:
             raise ValueError(f"team must be 'blue' or 'red', not {team!r}")
@@ -103,6 +116,7 @@ class NaoSoccerParallelEnv(ParallelEnv):
             raise ValueError(f"opponent must be one of {OPPONENTS}, not {opponent!r}")
         self.team = team
         self.opponent = opponent
+        self.scenario = protocol.scenario_text(scenario) if scenario is not None else None
         self.minutes = minutes
         self.deadline_ms = deadline_ms
         self.field = field
@@ -128,6 +142,8 @@ class NaoSoccerParallelEnv(ParallelEnv):
         self.host, self.port = host, port
         self.token = token
         self.admin_token = admin_token
+        if self.scenario is not None and admin_token is None:
+            raise ValueError("scenario needs admin_token: only the admin creates matches from a scenario")
         self.client: Optional[Client] = None
         self.match_id: Optional[int] = None
         self.joined: Optional[Dict[str, Any]] = None
@@ -184,6 +200,8 @@ class NaoSoccerParallelEnv(ParallelEnv):
                 fill="scripted" if self.opponent == "client" else self.opponent,
                 start_players=2 * protocol.PLAYERS_PER_TEAM if two_clients else protocol.PLAYERS_PER_TEAM,
                 deadline_ms=self.deadline_ms,
+                scenario=self.scenario,
+                scenario_team=self.team if self.scenario is not None else None,
             )
             match_id = info["match_id"]
         self.joined = self.client.join(self.team, self.token, range(protocol.PLAYERS_PER_TEAM), match_id)
@@ -281,6 +299,8 @@ class NaoSoccerParallelEnv(ParallelEnv):
             info["match_end"] = end
             info["stats"] = end["stats"]
             info["goals_by_phase"] = goals_by_phase(end["stats"])
+            if "scenario" in end:
+                info["scenario"] = end["scenario"]
             infos[a] = info
         self.agents = []
         return obs, rewards, terminations, truncations, infos

@@ -9,13 +9,14 @@ tests share one implementation.
 from __future__ import annotations
 
 import json
+import os
 import struct
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 PROTOCOL_NAME = "naosoccer"
 #: The protocol version this package speaks. The server must agree on the
 #: major version; a newer minor version only adds optional fields and types.
-PROTOCOL_VERSION = (1, 4)
+PROTOCOL_VERSION = (1, 5)
 
 HEADER_LEN = 4
 #: The server's default cap on a frame's payload; ``welcome`` announces the
@@ -141,3 +142,20 @@ def action_msg(tick: int, actions: List[Tuple[int, Any]], team: Optional[str] = 
     if team is not None:
         msg["team"] = team
     return msg
+
+
+def scenario_text(scenario: Union[str, "os.PathLike[str]"]) -> str:
+    """A scenario file's TOML text (docs/SCENARIOS.md), for ``create_match``'s
+    ``scenario`` (protocol 1.5) and the in-process envs.
+
+    ``scenario`` is a path (an ``os.PathLike``, or a string naming an
+    existing file), read here, or the file's text itself: a string that
+    names no file and holds a newline or ``=``. Any other string is taken for
+    a path, and a missing file raises ``FileNotFoundError``.
+    """
+    if not isinstance(scenario, str) or os.path.isfile(scenario):
+        with open(scenario, encoding="utf-8") as f:
+            return f.read()
+    if "\n" in scenario or "=" in scenario:
+        return scenario
+    raise FileNotFoundError(f"no scenario file {scenario!r} (and it is not a scenario's TOML text)")

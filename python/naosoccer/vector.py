@@ -21,6 +21,8 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector import VectorEnv as _GymVectorEnv
 from gymnasium.vector.utils import batch_space
 
+from .protocol import scenario_text
+
 try:
     from . import _native
 except ImportError as e:  # pragma: no cover - depends on how the package was installed
@@ -81,6 +83,17 @@ class VectorEnv(_GymVectorEnv):
     A match that ends is restarted in the same ``step``; the returned
     observation is the new match's kick-off. Slot ``i``'s ``e``-th match
     after ``reset(seed=s)`` has seed ``s + i + e * num_matches``.
+
+    ``scenario`` (a path or the file's TOML text, see
+    :func:`naosoccer.protocol.scenario_text`): every match starts from this
+    scenario (docs/SCENARIOS.md), drawn from its seed, with ``team`` as the
+    scenario's own team (blue with ``team="both"``), and ends (terminated)
+    when the scenario's play ends; its ``final_info`` then holds
+    ``scenario``: ``ending`` (the end condition's name), ``success`` and
+    ``ticks`` (played from the scenario's start). The restarted match starts
+    from the scenario again. ``opponent`` defaults to the file's
+    ``opponent`` then, as in ``naosoccer match --scenario``; without a
+    scenario to ``"scripted"``.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
@@ -90,7 +103,7 @@ class VectorEnv(_GymVectorEnv):
         num_matches: int = 8,
         *,
         team: str = "blue",
-        opponent: str = "scripted",
+        opponent: Optional[str] = None,
         minutes: Optional[float] = None,
         seed: Optional[int] = None,
         obs_version: Optional[int] = None,
@@ -98,6 +111,7 @@ class VectorEnv(_GymVectorEnv):
         like: Optional[str] = None,
         match_config: Optional[Union[str, os.PathLike]] = None,
         threads: Optional[int] = None,
+        scenario: Optional[Union[str, "os.PathLike[str]"]] = None,
     ) -> None:
         native = _require_native()
         if team not in _TEAMS:
@@ -112,7 +126,7 @@ class VectorEnv(_GymVectorEnv):
         if threads is None:
             threads = min(os.cpu_count() or 1, num_matches)
         self.team = team
-        self.opponent = None if team == "both" else opponent
+        self.scenario = scenario_text(scenario) if scenario is not None else None
         self.obs_version = int(obs_version)
         self.decision = dict(decision) if decision is not None else None
         self._native = native.VecMatches(
@@ -124,7 +138,10 @@ class VectorEnv(_GymVectorEnv):
             config_toml,
             minutes,
             threads,
+            self.scenario,
         )
+        #: The opponents' policy spec as resolved (``None`` with ``team="both"``).
+        self.opponent = None if team == "both" else self._native.opponent
         n, robots, dim, actions = self._native.shape
         self.num_envs = n
         self.robots = robots

@@ -144,3 +144,49 @@ def test_env_truncates_an_ended_match(binary):
             assert infos["blue_0"]["match_end"]["reason"] == "ended"
         finally:
             env.close()
+
+
+SCENARIO = """name = "still"
+[ball]
+x = 1.0
+y = 0.5
+
+[[robot]]
+side = "own"
+player = 2
+x = -1.0
+y = 0.0
+"""
+
+
+def test_scenario_and_set_state(server, tmp_path):
+    admin = server.tokens["admin"]
+    with Client(server.host, server.port) as c:
+        # Protocol 1.5: a match from a scenario, given as a path or as text.
+        path = tmp_path / "still.toml"
+        path.write_text(SCENARIO)
+        info = c.create_match(admin, seed=3, fill="idle", start_players=1, scenario=path, scenario_team="red")
+        assert info["scenario"] == {"name": "still", "team": "red"}
+        with pytest.raises(NaoSoccerError) as e:
+            c.create_match(admin, scenario=SCENARIO.replace("player = 2", "player = 5"))
+        assert e.value.code == "invalid_argument" and "`robot[0].player`" in e.value.message
+        # The state set before the start is the first observation.
+        tick = c.set_state(
+            admin,
+            info["match_id"],
+            ball={"x": -2.0, "y": 1.0},
+            robots=[{"robot": 6, "x": 1.5, "y": -0.5, "heading": 0.0}],
+        )
+        assert tick == 0
+        with pytest.raises(NaoSoccerError) as e:
+            c.set_state(admin, info["match_id"], robots=[{"robot": 0, "x": 0.0, "y": 0.0}])
+        assert e.value.code == "invalid_argument" and "out of play" in e.value.message
+        c.join("red", server.tokens["red"], [2], match_id=info["match_id"])
+        msg = c.recv()
+        (obs,) = msg["observations"]
+        # Red's frame: the world turned half round.
+        assert (obs["ball"]["x"], obs["ball"]["y"]) == (2.0, -1.0)
+        assert (obs["own"][2]["x"], obs["own"][2]["y"]) == (-1.5, 0.5)
+        c.send_actions(msg["tick"], [(2, "stay")])
+        msg = c.recv()
+        assert [e["kind"] for e in msg["events"]] == ["state_set"]

@@ -302,3 +302,44 @@ def test_positions_are_scaled_by_the_announced_pitch(make_env, tmp_path):
     for p in range(4):
         assert vec[FEATURE_NAMES.index(f"own{p}_x")] == pytest.approx(own[p]["x"] / 3.75, abs=1e-6)
         assert vec[FEATURE_NAMES.index(f"own{p}_y")] == pytest.approx(own[p]["y"] / 2.5, abs=1e-6)
+
+
+SCENARIO = Path(__file__).resolve().parents[2] / "assets" / "scenarios" / "empty-goal-close.toml"
+
+
+@pytest.mark.parametrize("team,as_text", [("blue", False), ("red", True)])
+def test_a_scenario_episode_is_the_cli_scenario_match(make_env, binary, team, as_text):
+    # Protocol 1.5: the env's matches start from the scenario, its team the
+    # scenario's own; standing still, the play ends as the CLI's does.
+    scenario = SCENARIO.read_text() if as_text else str(SCENARIO)
+    env = make_env(team=team, opponent="idle", scenario=scenario)
+    env.reset(seed=5)
+    steps = 0
+    while env.agents:
+        obs, rew, term, trunc, infos = env.step({a: STAY for a in env.agents})
+        steps += 1
+    assert all(term.values()) and not any(trunc.values())
+    end = infos[f"{team}_0"]["match_end"]
+    cli = json.loads(
+        subprocess.run(
+            [binary, "match", "--scenario", str(SCENARIO), "--own", team, "--seed", "5",
+             "--blue", "idle", "--red", "idle", "--json"],
+            check=True,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        ).stdout
+    )
+    assert end["state_hash"] == cli["state_hash"]
+    s = infos[f"{team}_0"]["scenario"]
+    assert s == end["scenario"]
+    assert (s["name"], s["team"]) == ("empty-goal-close", team)
+    assert (s["ending"], s["success"], s["ticks"]) == (cli["scenario"]["ending"], cli["scenario"]["success"], cli["scenario"]["ticks"])
+    assert s["ticks"] == steps
+
+
+def test_a_scenario_needs_the_admin_token(binary):
+    with pytest.raises(ValueError, match="admin_token"):
+        NaoSoccerParallelEnv(host="127.0.0.1", port=1, token="t", scenario=str(SCENARIO))
+    with pytest.raises(FileNotFoundError):
+        NaoSoccerParallelEnv(host="127.0.0.1", port=1, token="t", scenario="no-such-drill.toml")

@@ -149,3 +149,36 @@ def test_bad_arguments_are_refused():
         env.step(np.full((2, 4), 5))
     with pytest.raises(ValueError, match="expected 8 actions"):
         env.step(np.zeros(7, dtype=np.int64))
+
+
+SCENARIO = "assets/scenarios/empty-goal-close.toml"
+
+
+@pytest.mark.parametrize("team", ["blue", "red"])
+def test_a_scenario_plays_as_the_cli_scenario_match(binary, team):
+    # Every match starts from the scenario (its opponents the file's: idle)
+    # and ends with its play, as `naosoccer match --scenario` plays it.
+    env = VectorEnv(2, team=team, scenario=SCENARIO, seed=21)
+    assert env.opponent == "idle"
+    env.reset()
+    finals = {}
+    while len(finals) < 2:
+        _, _, term, _, infos = env.step(np.full((2, 4), STAY))
+        for i in np.flatnonzero(term):
+            finals.setdefault(int(i), {
+                "state_hash": infos["final_info"]["state_hash"][i],
+                "seed": int(infos["final_info"]["seed"][i]),
+                "ending": infos["final_info"]["scenario"]["ending"][i],
+                "ticks": int(infos["final_info"]["scenario"]["ticks"][i]),
+            })
+    for i in range(2):
+        out = subprocess.run(
+            [binary, "match", "--scenario", SCENARIO, "--own", team, "--seed", str(21 + i),
+             "--blue", "idle", "--red", "idle", "--json"],
+            check=True, capture_output=True, text=True,
+        )
+        cli = json.loads(out.stdout)
+        assert finals[i]["seed"] == 21 + i
+        assert finals[i]["state_hash"] == cli["state_hash"], (team, i)
+        assert finals[i]["ending"] == cli["scenario"]["ending"]
+        assert finals[i]["ticks"] == cli["scenario"]["ticks"]

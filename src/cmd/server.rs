@@ -65,7 +65,7 @@ pub struct ServerArgs {
     /// Red's team token [default: from --server-config, else random and printed].
     #[arg(long, value_name = "TOKEN")]
     pub red_token: Option<String>,
-    /// The admin token (create_match) [default: from --server-config, else random and printed].
+    /// The admin token (create_match, end_match, set_state) [default: from --server-config, else random and printed].
     #[arg(long, value_name = "TOKEN")]
     pub admin_token: Option<String>,
     /// Exit once the matches created at start have all ended.

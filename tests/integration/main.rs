@@ -33,3 +33,4 @@ mod server_errors;
 mod server_hardening;
 mod server_hardening_props;
 mod server_protocol_1_2;
+mod server_protocol_1_5;

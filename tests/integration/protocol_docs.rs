@@ -18,6 +18,7 @@ const CLIENT_TYPES: &[&str] = &[
     "leave",
     "ping",
     "end_match",
+    "set_state",
 ];
 const SERVER_TYPES: &[&str] = &[
     "welcome",
@@ -29,6 +30,7 @@ const SERVER_TYPES: &[&str] = &[
     "left",
     "pong",
     "match_ended",
+    "state_set",
     "error",
 ];
 

@@ -7,7 +7,7 @@ use naosoccer_proto::framed::{FrameReader, FrameWriter, WireError};
 use naosoccer_proto::msg::{
     ActionRef, ClientMsg, CreateMatch, EndMatch, ErrorCode, ErrorMsg, Hello, Join, Joined, Leave,
     ListMatches, MatchEnd, MatchId, MatchInfo, ObservationMsg, Ping, Player, PlayerAction,
-    ServerMsg, Welcome, PROTOCOL_NAME, PROTOCOL_VERSION,
+    ServerMsg, SetState, StateSet, Welcome, PROTOCOL_NAME, PROTOCOL_VERSION,
 };
 use naosoccer_proto::{Action, Team, Tick};
 use std::collections::VecDeque;
@@ -190,6 +190,16 @@ impl Client {
         };
         match self.request(&ClientMsg::EndMatch(req)).await? {
             ServerMsg::MatchEnded(e) => Ok(e.info),
+            other => Err(ClientError::Unexpected(format!("{other:?}"))),
+        }
+    }
+
+    /// Sets the state of a match (admin token; protocol 1.5): the ball and
+    /// robots `req` names go where it says before the match's next tick.
+    /// Returns that tick.
+    pub async fn set_state(&mut self, req: SetState) -> Result<StateSet, ClientError> {
+        match self.request(&ClientMsg::SetState(req)).await? {
+            ServerMsg::StateSet(s) => Ok(s),
             other => Err(ClientError::Unexpected(format!("{other:?}"))),
         }
     }

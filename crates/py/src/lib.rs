@@ -14,7 +14,7 @@ use pyo3::types::{PyDict, PyList};
 
 use naosoccer_policy::export::{write_ppo_team, Layer};
 use naosoccer_policy::DecisionConfig;
-use naosoccer_referee::MatchConfig;
+use naosoccer_referee::{MatchConfig, Scenario};
 use vector::{Controlled, EnvSpec, Finished, StepOut, VecEnvError, VecMatches};
 
 fn value_error(e: impl std::fmt::Display) -> PyErr {
@@ -30,29 +30,33 @@ impl From<VecEnvError> for PyErr {
 /// N matches stepped in process, one control tick a step.
 ///
 /// `VecMatches(num_matches, team, opponent, obs_version, decision_json,
-/// config_toml, minutes, threads)`; see `naosoccer.VectorEnv`, which wraps it.
+/// config_toml, minutes, threads, scenario_toml)`; see `naosoccer.VectorEnv`,
+/// which wraps it. `opponent` `None`: the scenario's `opponent`, else
+/// `scripted`.
 #[pyclass(module = "naosoccer._native", name = "VecMatches")]
 struct VecMatchesPy {
     // Locked only by the thread that holds the Python object's borrow; the
     // mutex makes the class shareable between Python threads.
     inner: Mutex<VecMatches>,
     shape: (usize, usize, usize, usize),
+    opponent: String,
 }
 
 #[pymethods]
 impl VecMatchesPy {
     #[new]
-    #[pyo3(signature = (num_matches, team, opponent, obs_version, decision_json=None, config_toml=None, minutes=None, threads=1))]
+    #[pyo3(signature = (num_matches, team, opponent, obs_version, decision_json=None, config_toml=None, minutes=None, threads=1, scenario_toml=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         num_matches: usize,
         team: &str,
-        opponent: &str,
+        opponent: Option<&str>,
         obs_version: u32,
         decision_json: Option<&str>,
         config_toml: Option<&str>,
         minutes: Option<f32>,
         threads: usize,
+        scenario_toml: Option<&str>,
     ) -> PyResult<Self> {
         let mut config = match config_toml {
             Some(t) => MatchConfig::from_toml_str(t).map_err(value_error)?,
@@ -68,14 +72,25 @@ impl VecMatchesPy {
             ),
             None => None,
         };
+        let scenario = match scenario_toml {
+            Some(t) => Some(Scenario::from_toml(t, None).map_err(value_error)?),
+            None => None,
+        };
+        // As `naosoccer match --scenario`: the file's opponents unless named.
+        let opponent = match (opponent, &scenario) {
+            (Some(o), _) => o.to_owned(),
+            (None, Some(s)) => s.opponent.clone(),
+            (None, None) => "scripted".to_owned(),
+        };
         let env = VecMatches::new(EnvSpec {
             matches: num_matches,
             controlled: Controlled::parse(team)?,
-            opponent: opponent.to_string(),
+            opponent: opponent.clone(),
             config,
             obs_version,
             decision,
             threads,
+            scenario,
         })?;
         let shape = (
             env.num_matches(),
@@ -86,7 +101,15 @@ impl VecMatchesPy {
         Ok(VecMatchesPy {
             inner: Mutex::new(env),
             shape,
+            opponent,
         })
+    }
+
+    /// The opponents' policy spec, as resolved (`opponent`, else the
+    /// scenario's, else `scripted`).
+    #[getter]
+    fn opponent(&self) -> &str {
+        &self.opponent
     }
 
     /// (matches, robots per match, observation length, actions).
@@ -218,6 +241,13 @@ fn finished_dict<'py>(
     }
     dict.set_item("stats", stats)?;
     dict.set_item("state_hash", format!("{:016x}", f.state_hash))?;
+    if let Some(s) = f.scenario {
+        let e = PyDict::new(py);
+        e.set_item("ending", s.ending)?;
+        e.set_item("success", s.success)?;
+        e.set_item("ticks", s.ticks)?;
+        dict.set_item("scenario", e)?;
+    }
     dict.set_item("obs", PyArray1::from_vec(py, f.obs).reshape([r, d])?)?;
     Ok(dict)
 }

@@ -8,6 +8,11 @@
 //! as evaluation does). So a match stepped here with the same seed and the
 //! same actions is the match `naosoccer match` plays, state hash and all.
 //!
+//! With a scenario (docs/SCENARIOS.md) every match starts from it, drawn
+//! from the match's seed, the controlled team (blue with both) as its own
+//! team, and ends when the scenario's play does: the match `naosoccer match
+//! --scenario FILE --own TEAM` plays.
+//!
 //! A finished match is reported once ([`Finished`]) and replaced at once by
 //! the slot's next match: slot `i`'s `e`-th match (counting from the last
 //! [`VecMatches::reset`] with seed `s`) has seed `s + i + e * n` for `n`
@@ -19,9 +24,9 @@ use naosoccer_policy::actions::{action_count, banned_actions, to_action, Support
 use naosoccer_policy::Policy;
 use naosoccer_policy::{DecisionConfig, NetAction, ObsScale, PolicyError, OBS_DIM};
 use naosoccer_proto::{
-    Action, MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
+    Action, Event, MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
-use naosoccer_referee::{blank_observation, Match, MatchConfig, MatchError};
+use naosoccer_referee::{blank_observation, Judge, Match, MatchConfig, MatchError, Scenario};
 
 /// Why an env cannot be built or stepped.
 #[derive(Debug, thiserror::Error)]
@@ -91,6 +96,17 @@ pub struct EnvSpec {
     pub decision: Option<DecisionConfig>,
     /// Worker threads for stepping (at least 1).
     pub threads: usize,
+    /// Every match starts from this scenario (checked against `config`).
+    pub scenario: Option<Scenario>,
+}
+
+/// How a scenario's play ended: its end condition's name, whether that is
+/// a success, and the control ticks played from the start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScenarioEnding {
+    pub ending: &'static str,
+    pub success: bool,
+    pub ticks: u64,
 }
 
 /// A match that ended during a step: what it was and how it ended.
@@ -105,6 +121,8 @@ pub struct Finished {
     pub state_hash: u64,
     /// The controlled robots' last observations (rows of the layout).
     pub obs: Vec<f32>,
+    /// With a scenario: how its play ended.
+    pub scenario: Option<ScenarioEnding>,
 }
 
 /// What one step writes, for all slots; rows are slot-major.
@@ -126,6 +144,10 @@ struct Slot {
     actions: [Action; ROBOTS],
     /// Matches this slot finished since the last reset.
     episode: u64,
+    /// With a scenario: the judge of this match's play, and the last
+    /// tick's events it reads.
+    judge: Option<Judge>,
+    events: Vec<Event>,
 }
 
 /// The per-slot constants a worker thread needs.
@@ -139,6 +161,8 @@ struct Shape<'a> {
     opponent: &'a Side,
     slots: usize,
     seed: u64,
+    /// The scenario and the colour of its own team.
+    scenario: Option<&'a (Scenario, Team)>,
 }
 
 /// The [`Shape`] of `$env`, borrowing only the fields that stepping reads
@@ -155,6 +179,7 @@ macro_rules! shape {
             opponent: &$env.opponent,
             slots: $env.matches,
             seed: $env.seed,
+            scenario: $env.scenario.as_ref(),
         }
     };
 }
@@ -172,6 +197,7 @@ pub struct VecMatches {
     slots: Vec<Slot>,
     /// Action indices per row, kept to hand a trained opponent its share.
     opp_actions: Vec<usize>,
+    scenario: Option<(Scenario, Team)>,
 }
 
 impl VecMatches {
@@ -196,6 +222,17 @@ impl VecMatches {
             Controlled::Both => Side::Builtin(naosoccer_policy::PolicyKind::Idle),
             Controlled::Team(_) => Side::parse(&spec.opponent)?,
         };
+        let scenario = match spec.scenario {
+            Some(s) => {
+                s.check(&spec.config).map_err(MatchError::from)?;
+                let own = match spec.controlled {
+                    Controlled::Team(t) => t,
+                    Controlled::Both => Team::Blue,
+                };
+                Some((s, own))
+            }
+            None => None,
+        };
         Ok(VecMatches {
             matches: spec.matches,
             robots: spec.controlled.robots(),
@@ -207,6 +244,7 @@ impl VecMatches {
             seed: 0,
             slots: Vec::new(),
             opp_actions: Vec::new(),
+            scenario,
         })
     }
 
@@ -418,7 +456,14 @@ fn match_seed(shape: &Shape, slot: usize, episode: u64) -> u64 {
 
 fn new_slot(shape: &Shape, index: usize, episode: u64) -> Result<Slot, VecEnvError> {
     let seed = match_seed(shape, index, episode);
-    let m = Match::new(shape.cfg, seed)?;
+    let (m, judge) = match shape.scenario {
+        Some((s, own)) => {
+            let m = Match::with_scenario(shape.cfg, seed, s, *own)?;
+            let judge = s.judge(shape.cfg, *own, m.tick());
+            (m, Some(judge))
+        }
+        None => (Match::new(shape.cfg, seed)?, None),
+    };
     let policies = RobotId::all()
         .map(|r| match shape.opponent {
             Side::Builtin(k) if !shape.robots.contains(&r) => Some(k.build(seed, r)),
@@ -431,6 +476,8 @@ fn new_slot(shape: &Shape, index: usize, episode: u64) -> Result<Slot, VecEnvErr
         policies,
         actions: [Action::Stay; ROBOTS],
         episode,
+        judge,
+        events: Vec::new(),
     };
     observe_all(&mut slot);
     Ok(slot)
@@ -485,12 +532,22 @@ fn step_chunk(
                 slot.actions[k] = p.act(&slot.obs[k]);
             }
         }
-        slot.m.step(&slot.actions);
+        let ending = match &slot.judge {
+            Some(judge) => {
+                slot.events.clear();
+                slot.events.extend_from_slice(slot.m.step(&slot.actions));
+                judge.check(&slot.m, &slot.events)
+            }
+            None => {
+                slot.m.step(&slot.actions);
+                None
+            }
+        };
         for (k, r) in shape.robots.iter().enumerate() {
             rewards[i * rows + k] = slot.m.reward(r.team(), r.player());
         }
         observe_all(slot);
-        if slot.m.is_finished() {
+        if slot.m.is_finished() || ending.is_some() {
             terminated[i] = true;
             write_rows(shape, slot, i, obs, masks);
             let index = first + i;
@@ -502,6 +559,11 @@ fn step_chunk(
                 stats: slot.m.stats(),
                 state_hash: slot.m.state_hash(),
                 obs: obs[i * rows * shape.dim..(i + 1) * rows * shape.dim].to_vec(),
+                scenario: ending.map(|e| ScenarioEnding {
+                    ending: e.kind.name(),
+                    success: e.success,
+                    ticks: e.ticks,
+                }),
             });
             *slot = new_slot(shape, index, slot.episode + 1)?;
         }
@@ -527,6 +589,7 @@ mod tests {
             obs_version: 2,
             decision: None,
             threads: 2,
+            scenario: None,
         }
     }
 
@@ -584,6 +647,56 @@ mod tests {
         for row in out.masks.chunks(6) {
             assert_eq!(row, [true, true, true, false, true, false]);
         }
+    }
+
+    /// A scenario's match ends with its play: the match `naosoccer match
+    /// --scenario FILE --own red` plays, then the slot restarts from the
+    /// scenario with its next seed.
+    #[test]
+    fn a_scenario_match_ends_with_its_play_and_restarts() {
+        let text = "duration = 3.0\n[ball]\nx = 2.5\ny = 0.0\nvx = 2.0\n\
+                    [[robot]]\nside = \"own\"\nplayer = 1\nx = 0\ny = 1\n\
+                    [[end]]\nwhen = \"goal_for\"\noutcome = \"success\"\n";
+        let scenario = Scenario::from_toml(text, None).unwrap();
+        let mut s = spec(2, "idle", 1.0);
+        s.controlled = Controlled::Team(Team::Red);
+        s.scenario = Some(scenario.clone());
+        let cfg = s.config.clone();
+        let mut env = VecMatches::new(s).unwrap();
+        env.reset(9).unwrap();
+        let stay = vec![4i64; 8];
+        let mut finished = Vec::new();
+        while finished.is_empty() {
+            finished = env.step(&stay).unwrap().finished;
+        }
+        assert_eq!(finished.len(), 2);
+        for f in &finished {
+            let mut m = Match::with_scenario(&cfg, f.seed, &scenario, Team::Red).unwrap();
+            let judge = scenario.judge(&cfg, Team::Red, m.tick());
+            let ending = loop {
+                let events = m.step(&[Action::Stay; ROBOTS]).to_vec();
+                if let Some(e) = judge.check(&m, &events) {
+                    break e;
+                }
+            };
+            assert_eq!(f.state_hash, m.state_hash(), "slot {}", f.slot);
+            assert_eq!(f.score.red, 1, "red, the own team, scored");
+            assert_eq!(
+                f.scenario,
+                Some(ScenarioEnding {
+                    ending: "goal_for",
+                    success: true,
+                    ticks: ending.ticks
+                })
+            );
+        }
+        assert_eq!(env.seeds(), vec![11, 12]);
+        assert_eq!(env.ticks(), vec![0, 0]);
+        // A scenario that does not fit the configuration is refused.
+        let mut bad = spec(1, "idle", 1.0);
+        bad.scenario = Some(Scenario::from_toml("[ball]\nx = 4.0\ny = 0\n", None).unwrap());
+        let e = VecMatches::new(bad).err().unwrap().to_string();
+        assert!(e.contains("`ball.x`"), "{e}");
     }
 
     #[test]

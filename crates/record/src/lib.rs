@@ -9,8 +9,9 @@
 //!   file opens as a 3D scene.
 //! - [`Recording::read`] reads one back, also a file cut short by a killed
 //!   writer (it keeps every completed chunk and says it was truncated).
-//! - [`replay`] re-simulates a recording and reports the first tick whose
-//!   state differs, or that all are identical.
+//! - [`replay`] re-simulates a recording (the recorded state changes,
+//!   `set_state`, re-applied before the tick they preceded) and reports the
+//!   first tick whose state differs, or that all are identical.
 //!
 //! Game time is the only clock in a recording (log time = tick / control
 //! rate), and compression runs on the writer's thread, so the same match
@@ -24,8 +25,8 @@ mod replay;
 mod writer;
 
 pub use messages::{
-    BallRecord, FinalRecord, MatchMeta, RobotRecord, ScenarioRecord, ScoreRecord, StateRecord,
-    TickActions, OLDEST_READABLE_FORMAT, RECORDING_FORMAT,
+    BallRecord, FinalRecord, MatchMeta, RobotRecord, ScenarioRecord, ScoreRecord, SetStateRecord,
+    StateRecord, TickActions, OLDEST_READABLE_FORMAT, RECORDING_FORMAT,
 };
 pub use reader::Recording;
 pub use replay::{replay, ReplayOutcome};
@@ -41,6 +42,9 @@ pub mod topics {
     pub const SCENE: &str = "/foxglove/scene";
     pub const TF: &str = "/foxglove/tf";
     pub const ALL: [&str; 7] = [META, ACTIONS, STATE, EVENTS, STATS, SCENE, TF];
+    /// State changes an admin made (protocol 1.5's `set_state`): created
+    /// with the first one, so a recording without any has the seven above.
+    pub const SET_STATE: &str = "/match/set_state";
 }
 
 /// What can go wrong with a recording.

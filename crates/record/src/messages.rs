@@ -1,6 +1,8 @@
 //! The JSON messages of the naosoccer channels (see docs/RECORDINGS.md).
 
-use naosoccer_proto::{Action, MatchStats, RobotId, Team, Tick, ROBOTS};
+use naosoccer_proto::{
+    Action, BallPlacement, MatchStats, RobotId, RobotPlacement, StateChange, Team, Tick, ROBOTS,
+};
 use naosoccer_referee::{Match, MatchConfig};
 use serde::{Deserialize, Serialize};
 
@@ -85,6 +87,36 @@ impl MatchMeta {
 pub struct TickActions {
     pub tick: Tick,
     pub actions: [Action; ROBOTS],
+}
+
+/// `/match/set_state`, for each state change an admin made (protocol 1.5's
+/// `set_state`): the change as asked (world coordinates), applied before
+/// tick `tick` was played. Replay applies it at the same point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SetStateRecord {
+    pub tick: Tick,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ball: Option<BallPlacement>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub robots: Vec<RobotPlacement>,
+}
+
+impl SetStateRecord {
+    pub fn new(tick: Tick, change: &StateChange) -> SetStateRecord {
+        SetStateRecord {
+            tick,
+            ball: change.ball,
+            robots: change.robots.clone(),
+        }
+    }
+
+    /// The change to re-apply.
+    pub fn change(&self) -> StateChange {
+        StateChange {
+            ball: self.ball,
+            robots: self.robots.clone(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

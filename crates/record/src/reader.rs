@@ -8,7 +8,8 @@ use naosoccer_proto::Event;
 use serde::de::DeserializeOwned;
 
 use crate::messages::{
-    FinalRecord, MatchMeta, StateRecord, TickActions, OLDEST_READABLE_FORMAT, RECORDING_FORMAT,
+    FinalRecord, MatchMeta, SetStateRecord, StateRecord, TickActions, OLDEST_READABLE_FORMAT,
+    RECORDING_FORMAT,
 };
 use crate::{topics, RecordError};
 
@@ -19,6 +20,8 @@ pub struct Recording {
     pub actions: Vec<TickActions>,
     pub states: Vec<StateRecord>,
     pub events: Vec<Event>,
+    /// The state changes an admin made (`set_state`), in order.
+    pub set_states: Vec<SetStateRecord>,
     /// Absent when the writer did not finish (killed, or stopped before the end).
     pub stats: Option<FinalRecord>,
     /// Messages per topic, Foxglove channels included.
@@ -54,6 +57,7 @@ impl Recording {
         let mut actions = Vec::new();
         let mut states = Vec::new();
         let mut events = Vec::new();
+        let mut set_states = Vec::new();
         let mut stats = None;
         let mut counts = BTreeMap::new();
         let mut truncated = None;
@@ -73,6 +77,7 @@ impl Recording {
                 topics::STATE => states.push(parse(topic, &msg.data)?),
                 topics::EVENTS => events.push(parse(topic, &msg.data)?),
                 topics::STATS => stats = Some(parse(topic, &msg.data)?),
+                topics::SET_STATE => set_states.push(parse(topic, &msg.data)?),
                 _ => {}
             }
         }
@@ -93,6 +98,7 @@ impl Recording {
             actions,
             states,
             events,
+            set_states,
             stats,
             counts,
             truncated,

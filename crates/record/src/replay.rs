@@ -25,8 +25,10 @@ pub enum ReplayOutcome {
     },
 }
 
-/// Re-runs the match from its config, seed and recorded actions and compares
-/// the state after every tick with the recorded one.
+/// Re-runs the match from its config, seed and recorded actions (and the
+/// recorded state changes, each applied before the tick it preceded, after
+/// that tick's state was checked) and compares the state after every tick
+/// with the recorded one.
 pub fn replay(rec: &Recording) -> Result<ReplayOutcome, RecordError> {
     let mut m = match &rec.meta.scenario {
         None => Match::new(&rec.meta.config, rec.meta.seed)?,
@@ -53,6 +55,7 @@ pub fn replay(rec: &Recording) -> Result<ReplayOutcome, RecordError> {
             return Ok(d);
         }
     }
+    let mut set_states = rec.set_states.iter().peekable();
     let mut ticks = 0;
     for a in &rec.actions {
         if a.tick != m.tick() {
@@ -64,6 +67,23 @@ pub fn replay(rec: &Recording) -> Result<ReplayOutcome, RecordError> {
         }
         if m.is_finished() {
             break;
+        }
+        // Changes recorded for an earlier tick cannot be re-applied where
+        // they were made: the recording does not hold together.
+        if let Some(s) = set_states.next_if(|s| s.tick < m.tick()) {
+            return Err(RecordError::NotARecording(format!(
+                "a state change for tick {} comes after tick {}",
+                s.tick,
+                m.tick()
+            )));
+        }
+        while let Some(s) = set_states.next_if(|s| s.tick == m.tick()) {
+            m.set_state(&s.change()).map_err(|e| {
+                RecordError::NotARecording(format!(
+                    "the state change recorded at tick {} is refused: {e}",
+                    s.tick
+                ))
+            })?;
         }
         m.step(&a.actions);
         ticks += 1;

@@ -8,12 +8,14 @@ use std::path::Path;
 use ::foxglove::messages::{FrameTransforms, SceneUpdate};
 use mcap::records::MessageHeader;
 use mcap::{Compression, WriteOptions, Writer};
-use naosoccer_proto::{Action, Event, Tick, ROBOTS};
+use naosoccer_proto::{Action, Event, StateChange, Tick, ROBOTS};
 use naosoccer_referee::Match;
 use serde::Serialize;
 
 use crate::foxglove;
-use crate::messages::{hash_hex, FinalRecord, MatchMeta, ScoreRecord, StateRecord, TickActions};
+use crate::messages::{
+    hash_hex, FinalRecord, MatchMeta, ScoreRecord, SetStateRecord, StateRecord, TickActions,
+};
 use crate::{topics, RecordError};
 
 /// How a recording is written.
@@ -124,6 +126,9 @@ pub struct Recorder {
     opts: RecorderOptions,
     buf: Vec<u8>,
     state: Option<StateRecord>,
+    /// `/match/set_state`'s channel and its next sequence number, once the
+    /// first state change made it.
+    set_state: Option<(u16, u32)>,
 }
 
 impl Recorder {
@@ -223,6 +228,7 @@ impl Recorder {
             opts,
             buf: Vec::with_capacity(4096),
             state: None,
+            set_state: None,
         };
         rec.write_json(Ch::Meta, 0, meta)?;
         if rec.opts.foxglove {
@@ -312,6 +318,42 @@ impl Recorder {
         Ok(())
     }
 
+    /// Records a state change (protocol 1.5's `set_state`) made before tick
+    /// `tick` was played: call it after the change, before that tick's
+    /// [`Recorder::tick`]. The first one creates the `/match/set_state`
+    /// channel.
+    pub fn set_state(&mut self, tick: Tick, change: &StateChange) -> Result<(), RecordError> {
+        let (channel, sequence) = match self.set_state {
+            Some(c) => c,
+            None => {
+                let schema = self.writer.add_schema(
+                    "naosoccer.SetState",
+                    "jsonschema",
+                    b"{\"type\":\"object\"}",
+                )?;
+                let channel =
+                    self.writer
+                        .add_channel(schema, topics::SET_STATE, "json", &BTreeMap::new())?;
+                (channel, 0)
+            }
+        };
+        self.set_state = Some((channel, sequence + 1));
+        let record = SetStateRecord::new(tick, change);
+        let data = serde_json::to_vec(&record).map_err(|source| RecordError::Json {
+            topic: topics::SET_STATE.to_string(),
+            source,
+        })?;
+        let log_time = tick.get() * self.tick_ns;
+        let header = MessageHeader {
+            channel_id: channel,
+            sequence,
+            log_time,
+            publish_time: log_time,
+        };
+        self.writer.write_to_known_channel(&header, &data)?;
+        Ok(())
+    }
+
     /// Writes the final statistics, the summary and the index, and returns
     /// the number of messages per channel and the underlying writer.
     pub fn finish(mut self, m: &Match) -> Result<(RecordingSummary, Sink), RecordError> {
@@ -325,11 +367,14 @@ impl Recorder {
         };
         self.write_json(Ch::Stats, m.tick().get() * self.tick_ns, &fin)?;
         self.writer.finish()?;
-        let messages = topics::ALL
+        let mut messages: BTreeMap<String, u64> = topics::ALL
             .iter()
             .zip(self.sequences)
             .map(|(t, n)| (t.to_string(), u64::from(n)))
             .collect();
+        if let Some((_, n)) = self.set_state {
+            messages.insert(topics::SET_STATE.to_string(), u64::from(n));
+        }
         Ok((RecordingSummary { messages }, self.writer.into_inner()))
     }
 

@@ -273,3 +273,74 @@ fn format_2_still_replays_and_others_are_refused() {
         );
     }
 }
+
+/// Protocol 1.5's `set_state`: a change recorded before the tick it
+/// preceded is re-applied there by replay, which reproduces every state;
+/// a recording whose change is moved to another tick diverges at that
+/// point. A recording with no change has no `/match/set_state` channel.
+#[test]
+fn recorded_state_changes_are_replayed_at_their_tick() {
+    use naosoccer_proto::{BallPlacement, RobotPlacement, StateChange};
+    let cfg = short_config(6.0);
+    let seed = 4;
+    let mut m = Match::new(&cfg, seed).unwrap();
+    let mut policies: Vec<_> = RobotId::all()
+        .map(|r| PolicyKind::Scripted.build(seed, r))
+        .collect();
+    let mut rec =
+        Recorder::in_memory(&meta(&cfg, seed, &m), &m, RecorderOptions::default()).unwrap();
+    let change = |t: u64| StateChange {
+        ball: Some(BallPlacement {
+            x: -1.0 + 0.1 * t as f32,
+            y: 0.7,
+            vx: 0.5,
+            vy: -1.0,
+        }),
+        robots: vec![RobotPlacement {
+            robot: t % 8,
+            x: 0.5,
+            y: -1.5,
+            heading: Some(2.0),
+            fallen: t.is_multiple_of(2),
+        }],
+    };
+    let mut obs = blank_observation();
+    while !m.is_finished() {
+        let t = m.tick().get();
+        if t == 0 || t == 13 || t == 31 {
+            m.set_state(&change(t)).unwrap();
+            rec.set_state(m.tick(), &change(t)).unwrap();
+        }
+        let mut actions = [Action::Stay; ROBOTS];
+        for r in RobotId::all() {
+            m.observe_into(r.team(), r.player(), &mut obs);
+            actions[r.index()] = policies[r.index()].act(&obs);
+        }
+        let events = m.step(&actions).to_vec();
+        rec.tick(&m, &actions, &events).unwrap();
+    }
+    let (summary, sink) = rec.finish(&m).unwrap();
+    assert_eq!(summary.messages.get("/match/set_state"), Some(&3));
+    let bytes = sink.into_bytes().unwrap();
+    let rec = Recording::read(&bytes).unwrap();
+    let ticks: Vec<u64> = rec.set_states.iter().map(|s| s.tick.get()).collect();
+    assert_eq!(ticks, [0, 13, 31]);
+    assert_eq!(rec.set_states[1].change(), change(13));
+    assert_eq!(
+        replay(&rec).unwrap(),
+        ReplayOutcome::Identical {
+            ticks: 60,
+            truncated: false
+        }
+    );
+    let mut moved = rec.clone();
+    moved.set_states[1].tick = Tick::new(14);
+    match replay(&moved).unwrap() {
+        ReplayOutcome::Diverged { tick, .. } => assert_eq!(tick, Tick::new(14)),
+        other => panic!("{other:?}"),
+    }
+    let (plain, _) = record(&cfg, seed, RecorderOptions::default());
+    let plain = Recording::read(&plain).unwrap();
+    assert!(plain.set_states.is_empty());
+    assert!(!plain.counts.contains_key("/match/set_state"));
+}

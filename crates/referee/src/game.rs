@@ -16,6 +16,8 @@ use crate::rules::{
 };
 use crate::scenario::ScenarioError;
 
+pub use state::{StateError, MAX_BALL_SPEED};
+
 /// Why a match could not be set up.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -31,6 +33,7 @@ pub enum MatchError {
 mod query;
 mod reward;
 mod start;
+mod state;
 
 pub use reward::log_compress;
 use reward::{aims_at_teammate, pass_bonus};
@@ -54,9 +57,10 @@ pub struct Match {
     /// Control ticks played.
     tick: Tick,
     finished: bool,
-    /// The start's kick-off (or a scenario's set play), announced with the
-    /// first tick's events.
-    announce: Option<Event>,
+    /// Events that happened between ticks, announced with the next tick's
+    /// events: the start's kick-off (or a scenario's set play), a state set
+    /// from outside (`Match::set_state`).
+    announce: Vec<Event>,
     /// Robots out of play (a scenario's absent robots): the sim holds them
     /// off the pitch and their actions are ignored.
     off: [bool; ROBOTS],
@@ -114,7 +118,7 @@ impl Match {
             ),
             tick: Tick::ZERO,
             finished: false,
-            announce: None,
+            announce: Vec::new(),
             off: [false; ROBOTS],
             scenario: None,
             controller: None,
@@ -126,7 +130,7 @@ impl Match {
             cfg: cfg.clone(),
         };
         m.place_for_kickoff(m.kickoff.first(), Tick::ZERO);
-        m.announce = Some(Event::KickOff {
+        m.announce.push(Event::KickOff {
             tick: Tick::ZERO,
             team: m.kickoff.first(),
         });
@@ -173,9 +177,7 @@ impl Match {
             return &self.outcome.events;
         }
         let tick = self.tick;
-        if let Some(e) = self.announce.take() {
-            self.outcome.events.push(e);
-        }
+        self.outcome.events.append(&mut self.announce);
         // A step of `forward` covers about walk_speed / control_hz: the
         // keep-out margin, so a robot on the edge cannot step inside.
         let step_margin = self.cfg.sim.walk_speed * 1.2 / self.cfg.control_hz;

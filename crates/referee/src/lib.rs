@@ -21,7 +21,7 @@ pub mod scenario;
 mod sim_glue;
 
 pub use config::{ConfigError, FirstKickOff, MatchConfig, Placement, RewardConfig, RulesConfig};
-pub use game::{log_compress, Match, MatchError};
+pub use game::{log_compress, Match, MatchError, StateError, MAX_BALL_SPEED};
 pub use observe::blank_observation;
 pub use rules::{Command, Field};
 pub use scenario::{Ending, Judge, Scenario, ScenarioError};

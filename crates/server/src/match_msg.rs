@@ -3,7 +3,7 @@
 //! connection ([`ConnEntry`]) with the two ways of sending to it.
 
 use naosoccer_proto::msg::{ErrorMsg, Joined, MatchEnd, MatchId, MatchInfo, Player};
-use naosoccer_proto::{Action, Event, Observation, Team, Tick, PLAYERS_PER_TEAM};
+use naosoccer_proto::{Action, Event, Observation, StateChange, Team, Tick, PLAYERS_PER_TEAM};
 use naosoccer_referee::Match;
 use std::sync::Arc;
 use tokio::sync::{mpsc, oneshot};
@@ -47,6 +47,12 @@ pub(crate) enum MatchCmd {
     /// End the match now (`end_match`): its clients get their `match_end`,
     /// then the reply carries the final description.
     End { reply: oneshot::Sender<MatchInfo> },
+    /// Set the match's state (`set_state`) before its next tick; the reply
+    /// carries that tick, or why the change was refused.
+    SetState {
+        change: StateChange,
+        reply: oneshot::Sender<Result<Tick, ErrorMsg>>,
+    },
     /// Validated by the connection: only players it controls.
     Action {
         conn: ConnId,

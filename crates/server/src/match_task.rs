@@ -20,8 +20,8 @@ use crate::shared::Listing;
 use naosoccer_policy::ScriptedParams;
 use naosoccer_policy::{Policy, PolicyKind};
 use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Fill, MatchId, MatchInfo, MatchState, Mode};
-use naosoccer_proto::{Action, Event, Observation, RobotId, Team, Tick, ROBOTS};
-use naosoccer_referee::Match;
+use naosoccer_proto::{Action, Event, Observation, RobotId, StateChange, Team, Tick, ROBOTS};
+use naosoccer_referee::{Ending, Judge, Match};
 use std::future::Future;
 use std::pin::Pin;
 use std::sync::Arc;
@@ -45,6 +45,9 @@ pub(crate) struct MatchParams {
     pub epoch: Instant,
     /// Fault injection (tests only): panic when this tick is played.
     pub panic_at_tick: Option<u64>,
+    /// A match created from a scenario: the judge of its play, which ends
+    /// the match when the play ends.
+    pub judge: Option<Judge>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -82,6 +85,15 @@ pub(crate) struct MatchTask {
     lateness_us: Vec<u32>,
     /// Who asked to end the match early, if anyone: told once it has ended.
     ended_by: Option<oneshot::Sender<MatchInfo>>,
+    /// Whether the match has started (its observer told).
+    started: bool,
+    /// State changes (`set_state`) accepted before the match started:
+    /// applied, in order, when it starts, after the observer saw the start.
+    queued: Vec<StateChange>,
+    /// The tick the match started from (a scenario's start tick, else 0).
+    first_tick: Tick,
+    /// How the scenario's play ended, once it has.
+    ending: Option<Ending>,
 }
 
 enum Stop {
@@ -118,6 +130,7 @@ impl MatchTask {
                 .collect(),
         };
         let obs_scratch = game.observe(Team::Blue, 0);
+        let first_tick = game.tick();
         MatchTask {
             params,
             game,
@@ -137,6 +150,10 @@ impl MatchTask {
             events: Arc::new(Vec::with_capacity(16)),
             lateness_us: Vec::new(),
             ended_by: None,
+            started: false,
+            queued: Vec::new(),
+            first_tick,
+            ending: None,
         }
     }
 
@@ -158,6 +175,10 @@ impl MatchTask {
         tracing::info!(match_id = %self.params.id, "match started");
         if let Some(o) = &mut self.observer {
             o.on_start(&self.listing.info.borrow(), &self.game);
+        }
+        self.started = true;
+        for change in std::mem::take(&mut self.queued) {
+            self.apply_state(&change);
         }
         match self.params.mode {
             Mode::Lockstep => self.lockstep().await,
@@ -218,8 +239,14 @@ impl MatchTask {
         Ok(())
     }
 
+    /// Whether the match plays on: its clock has not run out and its
+    /// scenario's play (if any) has not ended.
+    fn playing(&self) -> bool {
+        !self.game.is_finished() && self.ending.is_none()
+    }
+
     async fn lockstep(&mut self) -> Stop {
-        while !self.game.is_finished() {
+        while self.playing() {
             let tick = self.game.tick();
             self.answered = [false; ROBOTS];
             self.actions = [Action::Stay; ROBOTS];
@@ -261,7 +288,7 @@ impl MatchTask {
         let periods = since.as_nanos().div_ceil(period.as_nanos().max(1)) as u32;
         let mut next = self.params.epoch + phase + period * periods;
         tokio::time::sleep_until(next).await;
-        while !self.game.is_finished() {
+        while self.playing() {
             let tick = self.game.tick();
             self.send_observations(tick);
             next += period;
@@ -328,6 +355,9 @@ impl MatchTask {
                 buf.extend_from_slice(events);
             }
             None => self.events = Arc::new(events.to_vec()),
+        }
+        if let Some(j) = &self.params.judge {
+            self.ending = j.check(&self.game, &self.events);
         }
         if let Some(o) = &mut self.observer {
             o.on_tick(&TickRecord {

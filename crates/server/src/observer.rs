@@ -4,7 +4,7 @@
 //! from the match task, in tick order.
 
 use naosoccer_proto::msg::{MatchEnd, MatchInfo};
-use naosoccer_proto::{Action, Event, Tick, ROBOTS};
+use naosoccer_proto::{Action, Event, StateChange, Tick, ROBOTS};
 use naosoccer_referee::Match;
 use std::sync::Arc;
 use std::time::Duration;
@@ -29,6 +29,12 @@ pub trait MatchObserver: Send {
     /// Before the first tick, with the match at kick-off.
     fn on_start(&mut self, info: &MatchInfo, game: &Match);
     fn on_tick(&mut self, record: &TickRecord<'_>);
+    /// An admin set the state (`set_state`) before tick `tick` was played;
+    /// `game` is the match after the change. Changes made while the match
+    /// waited for its players come right after [`MatchObserver::on_start`].
+    fn on_state_set(&mut self, tick: Tick, change: &StateChange, game: &Match) {
+        let _ = (tick, change, game);
+    }
     /// After the last tick (or at shutdown).
     fn on_end(&mut self, end: &MatchEnd, game: &Match);
 }

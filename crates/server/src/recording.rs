@@ -7,6 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use naosoccer_proto::msg::{EndReason, MatchEnd, MatchInfo, Mode};
+use naosoccer_proto::{StateChange, Tick};
 use naosoccer_record::{MatchMeta, Recorder, RecorderOptions};
 use naosoccer_referee::Match;
 
@@ -74,6 +75,14 @@ impl MatchObserver for McapObserver {
         }
     }
 
+    fn on_state_set(&mut self, tick: Tick, change: &StateChange, _game: &Match) {
+        if let Some(r) = &mut self.rec {
+            if let Err(e) = r.set_state(tick, change) {
+                self.fail("a state change", e);
+            }
+        }
+    }
+
     fn on_end(&mut self, end: &MatchEnd, game: &Match) {
         if let Some(r) = self.rec.take() {
             match r.finish(game) {
@@ -100,6 +109,11 @@ impl MatchObserver for Fanout {
     fn on_tick(&mut self, record: &TickRecord<'_>) {
         for o in &mut self.0 {
             o.on_tick(record);
+        }
+    }
+    fn on_state_set(&mut self, tick: Tick, change: &StateChange, game: &Match) {
+        for o in &mut self.0 {
+            o.on_state_set(tick, change, game);
         }
     }
     fn on_end(&mut self, end: &MatchEnd, game: &Match) {

@@ -10,7 +10,7 @@ use naosoccer_proto::msg::{
     CreateMatch, ErrorCode, ErrorMsg, MatchId, MatchInfo, MatchState, Player,
 };
 use naosoccer_proto::Team;
-use naosoccer_referee::{Match, MatchError};
+use naosoccer_referee::{Match, MatchError, Scenario};
 use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::net::IpAddr;
 use std::sync::atomic::AtomicU64;
@@ -152,6 +152,21 @@ impl Shared {
                 "deadline_ms {deadline_ms} not in 1..=600000"
             )));
         }
+        // Checked before a match id is taken: a refused scenario leaves no
+        // trace (protocol 1.5).
+        let scenario = match &req.scenario {
+            Some(text) => {
+                let s = Scenario::from_toml(text, None).map_err(|e| invalid(e.to_string()))?;
+                s.check(&match_cfg).map_err(|e| invalid(e.to_string()))?;
+                Some((s, req.scenario_team.unwrap_or(Team::Blue)))
+            }
+            None if req.scenario_team.is_some() => {
+                return Err(invalid(
+                    "scenario_team is given without scenario".to_owned(),
+                ))
+            }
+            None => None,
+        };
         let id = {
             let mut reg = self.registry();
             let unfinished = reg.starting
@@ -170,7 +185,7 @@ impl Shared {
             reg.starting += 1;
             MatchId(reg.next_id)
         };
-        let params = MatchParams {
+        let mut params = MatchParams {
             id,
             seed: req.seed.unwrap_or(cfg.seed.wrapping_add(id.0 - 1)),
             mode: req.mode.unwrap_or(cfg.mode),
@@ -180,8 +195,18 @@ impl Shared {
             deadline: Duration::from_millis(deadline_ms),
             epoch: self.epoch,
             panic_at_tick: cfg.panic_at.get(&id).copied(),
+            judge: None,
         };
-        let game = match Match::new(&match_cfg, params.seed) {
+        let built = match &scenario {
+            Some((s, own)) => {
+                Match::with_scenario(&match_cfg, params.seed, s, *own).inspect(|game| {
+                    // The judge of its play, from its start tick.
+                    params.judge = Some(s.judge(&match_cfg, *own, game.tick()));
+                })
+            }
+            None => Match::new(&match_cfg, params.seed),
+        };
+        let game = match built {
             Ok(game) => game,
             Err(e) => {
                 self.registry().starting -= 1;

@@ -7,7 +7,7 @@ use super::{
     ErrorCode, ErrorMsg, Fill, MatchId, Mode, Player, Version, PROTOCOL_NAME, PROTOCOL_VERSION,
 };
 use crate::head::Member;
-use crate::types::{Action, Team, Tick};
+use crate::types::{Action, BallPlacement, RobotPlacement, StateChange, Team, Tick};
 
 /// Everything a client sends.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -21,6 +21,7 @@ pub enum ClientMsg {
     Leave(Leave),
     Ping(Ping),
     EndMatch(EndMatch),
+    SetState(SetState),
     /// A `type` this build does not know; answered with `unimplemented`.
     #[serde(other, skip_serializing)]
     Unknown,
@@ -28,7 +29,7 @@ pub enum ClientMsg {
 
 impl ClientMsg {
     /// The wire names of the known `type`s.
-    pub const KINDS: [&'static str; 8] = [
+    pub const KINDS: [&'static str; 9] = [
         "hello",
         "create_match",
         "list_matches",
@@ -37,6 +38,7 @@ impl ClientMsg {
         "leave",
         "ping",
         "end_match",
+        "set_state",
     ];
 
     /// Decodes one frame's payload. On failure, the error keeps what could
@@ -59,6 +61,7 @@ impl ClientMsg {
             ClientMsg::Leave(_) => "leave",
             ClientMsg::Ping(_) => "ping",
             ClientMsg::EndMatch(_) => "end_match",
+            ClientMsg::SetState(_) => "set_state",
             ClientMsg::Unknown => "unknown",
         }
     }
@@ -187,6 +190,14 @@ pub struct CreateMatch {
     /// Lockstep: how long a tick waits for actions, in milliseconds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub deadline_ms: Option<u64>,
+    /// A scenario file's text (TOML, docs/SCENARIOS.md): the match starts
+    /// from it and ends when its play ends (protocol 1.5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenario: Option<String>,
+    /// The colour the scenario's own team plays (default blue; only with
+    /// `scenario`; protocol 1.5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenario_team: Option<Team>,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -243,6 +254,34 @@ pub struct Leave {}
 pub struct EndMatch {
     pub token: String,
     pub match_id: MatchId,
+}
+
+/// Set the state of a running match (admin token; protocol 1.5): move the
+/// ball and any robots, as rcssserver's trainer does. Answered by
+/// [`StateSet`](super::StateSet). World coordinates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SetState {
+    pub token: String,
+    pub match_id: MatchId,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ball: Option<BallPlacement>,
+    /// Left out or `null`: no robot.
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "crate::types::null_as_default"
+    )]
+    pub robots: Vec<RobotPlacement>,
+}
+
+impl SetState {
+    /// The change it asks for.
+    pub fn change(&self) -> StateChange {
+        StateChange {
+            ball: self.ball,
+            robots: self.robots.clone(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]

@@ -36,7 +36,7 @@ pub const PROTOCOL_NAME: &str = "naosoccer";
 
 /// This build's protocol version. Peers must agree on `major`; a higher
 /// `minor` only adds optional fields and message types.
-pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 4 };
+pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 5 };
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Version {
@@ -531,6 +531,69 @@ mod tests {
             serde_json::from_str(r#"{"type":"end_match","token":"t","match_id":4}"#).unwrap();
         assert_eq!(e.kind(), "end_match");
         assert!(ClientMsg::decode(br#"{"type":"end_match","token":"t"}"#).is_err());
+    }
+
+    /// Protocol 1.5: `set_state` and its reply, the `state_set` event, and
+    /// `scenario` in `create_match`, descriptions and `match_end`, all
+    /// optional where a 1.4 peer leaves them out.
+    #[test]
+    fn protocol_1_5_messages_and_fields() {
+        let m: ClientMsg = serde_json::from_str(
+            r#"{"type":"set_state","token":"t","match_id":2,"robots":[{"robot":9,"x":0.5,"y":-1}]}"#,
+        )
+        .unwrap();
+        let ClientMsg::SetState(s) = &m else {
+            panic!("{m:?}")
+        };
+        assert_eq!(m.kind(), "set_state");
+        assert_eq!(s.ball, None);
+        let r = s.robots[0];
+        // Any unsigned robot number decodes; the referee names a bad one.
+        assert_eq!((r.robot, r.heading, r.fallen), (9, None, false));
+        assert_eq!(s.change().robots, s.robots);
+        let null: ClientMsg = serde_json::from_str(
+            r#"{"type":"set_state","token":"t","match_id":2,"ball":{"x":1,"y":2,"vx":null,"vy":null},"robots":null}"#,
+        )
+        .unwrap();
+        assert!(
+            matches!(null, ClientMsg::SetState(SetState { ref robots, .. }) if robots.is_empty())
+        );
+        for bad in [
+            r#"{"type":"set_state","token":"t","ball":{"x":0,"y":0}}"#,
+            r#"{"type":"set_state","token":"t","match_id":1,"ball":{"x":0}}"#,
+            r#"{"type":"set_state","token":"t","match_id":1,"robots":[{"robot":-1,"x":0,"y":0}]}"#,
+        ] {
+            let e = ClientMsg::decode(bad.as_bytes()).unwrap_err().to_error();
+            assert_eq!(e.in_reply_to.as_deref(), Some("set_state"), "{bad}");
+        }
+        let r: ServerMsg =
+            serde_json::from_str(r#"{"type":"state_set","match_id":2,"tick":7}"#).unwrap();
+        assert_eq!(
+            r,
+            ServerMsg::StateSet(StateSet {
+                match_id: MatchId(2),
+                tick: Tick::new(7)
+            })
+        );
+        let e: crate::types::Event =
+            serde_json::from_str(r#"{"kind":"state_set","tick":7}"#).unwrap();
+        assert_eq!(e.tick(), Some(Tick::new(7)));
+        let c: ClientMsg = serde_json::from_str(
+            r#"{"type":"create_match","token":"a","scenario":"name = \"x\"\n","scenario_team":"red"}"#,
+        )
+        .unwrap();
+        assert!(matches!(
+            c,
+            ClientMsg::CreateMatch(CreateMatch {
+                scenario: Some(_),
+                scenario_team: Some(Team::Red),
+                ..
+            })
+        ));
+        let info = r#"{"match_id":1,"state":"running","mode":"lockstep","fill":"idle","seed":1,"control_hz":10.0,"tick":3,"total_ticks":60,"deadline_ms":100,"start_players":1,"score":{"blue":0,"red":0},"taken":{"blue":[false,false,false,false],"red":[false,false,false,false]}}"#;
+        let info: MatchInfo = serde_json::from_str(info).unwrap();
+        assert_eq!(info.scenario, None);
+        assert!(!serde_json::to_string(&info).unwrap().contains("scenario"));
     }
 
     /// Issue 15: a number too large for f32 parsed to infinity, which

@@ -19,6 +19,7 @@ pub enum ServerMsg {
     Left(Left),
     Pong(Pong),
     MatchEnded(MatchEnded),
+    StateSet(StateSet),
     Error(ErrorMsg),
     /// A `type` this build does not know (from a newer minor version); skip it.
     #[serde(other, skip_serializing)]
@@ -44,6 +45,14 @@ pub struct MatchCreated {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MatchEnded {
     pub info: MatchInfo,
+}
+
+/// The reply to `set_state` (protocol 1.5): the state was set before tick
+/// `tick` of the match was played.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StateSet {
+    pub match_id: MatchId,
+    pub tick: Tick,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -85,6 +94,34 @@ pub struct MatchInfo {
     pub score: Score,
     /// Which players of each team a client controls.
     pub taken: PerTeam<[bool; PLAYERS_PER_TEAM]>,
+    /// The scenario the match started from (`create_match`'s `scenario`;
+    /// protocol 1.5); absent for a match started from the kick-off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenario: Option<ScenarioInfo>,
+}
+
+/// A match's scenario, as its description names it (protocol 1.5).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ScenarioInfo {
+    /// The file's `name` (`"scenario"` when it has none).
+    pub name: String,
+    /// The colour the scenario's own team plays.
+    pub team: Team,
+}
+
+/// How a match's scenario play ended, in its `match_end` (protocol 1.5).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ScenarioEnd {
+    pub name: String,
+    pub team: Team,
+    /// The end condition that ended the play (its `when`, such as
+    /// `goal_for`, or `time_up`); `None` when the match ended otherwise
+    /// (an admin, the server stopping, a failure).
+    pub ending: Option<String>,
+    /// The outcome the file gives that condition; `None` with `ending`.
+    pub success: Option<bool>,
+    /// Control ticks played from the scenario's start.
+    pub ticks: u64,
 }
 
 /// The join was accepted; observations follow.
@@ -210,6 +247,11 @@ pub struct MatchEnd {
     /// The referee's hash of the final state, 16 hex digits: equal for equal
     /// matches on one build (a string because JSON readers lose u64 precision).
     pub state_hash: String,
+    /// For a match started from a scenario, how its play ended (protocol
+    /// 1.5); absent otherwise. Boxed: a match ends once, and every other
+    /// server message would otherwise be as large.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenario: Option<Box<ScenarioEnd>>,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]

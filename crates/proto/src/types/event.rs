@@ -134,6 +134,11 @@ pub enum Event {
     End {
         tick: Tick,
     },
+    /// An admin set the state of the match (`set_state`; protocol 1.5)
+    /// before this tick was played: the tick was played from the new state.
+    StateSet {
+        tick: Tick,
+    },
     /// An event of a kind this build does not know: a later server's (a
     /// minor version may add kinds; docs/PROTOCOL.md, "Events"). Read so
     /// that the message holding it still decodes; skip it. Its fields are
@@ -157,7 +162,8 @@ impl Event {
             | Event::KickOff { tick, .. }
             | Event::SetPlay { tick, .. }
             | Event::HalfTime { tick }
-            | Event::End { tick } => *tick,
+            | Event::End { tick }
+            | Event::StateSet { tick } => *tick,
             Event::Unknown => return None,
         })
     }

@@ -1,21 +1,25 @@
 //! Game-level wire types: ids, ticks, actions, observations, events,
 //! statistics.
 //!
-//! They live in four files, all re-exported here (and from the crate
+//! They live in five files, all re-exported here (and from the crate
 //! root): `ids.rs` (teams, robots, players, ticks, one value per team),
 //! `action.rs` (the actions, and the rule a `pass` follows), `obs.rs` (the
-//! observation a player receives and its parts) and `event.rs` (the
-//! referee's events, goal phases, statistics).
+//! observation a player receives and its parts), `event.rs` (the
+//! referee's events, goal phases, statistics) and `state.rs` (a change of
+//! a match's state from outside the play: `set_state`, protocol 1.5).
 
 mod action;
 mod event;
 mod ids;
 mod obs;
+mod state;
 
 pub use action::*;
 pub use event::*;
 pub use ids::*;
 pub use obs::*;
+pub(crate) use state::null_as_default;
+pub use state::*;
 
 #[cfg(test)]
 mod tests {

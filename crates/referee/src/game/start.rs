@@ -76,16 +76,16 @@ impl Match {
         self.pass.reset();
         self.set_play.clear();
         self.restart.clear();
-        self.announce = None;
+        self.announce.clear();
         if let Some((kind, team)) = start.set_play {
             let [x, y, _] = self.sim.snapshot().ball.pos;
             self.set_play.award(kind, team, (x, y), tick);
             if kind == SetPlayKind::KickOff {
                 self.restart.kick_off(team, tick);
-                self.announce = Some(Event::KickOff { tick, team });
+                self.announce.push(Event::KickOff { tick, team });
             } else {
                 self.restart.set_play(team, tick);
-                self.announce = Some(Event::SetPlay {
+                self.announce.push(Event::SetPlay {
                     tick,
                     play: kind,
                     team,

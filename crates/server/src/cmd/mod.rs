@@ -10,6 +10,7 @@ mod join;
 mod leave;
 mod list_matches;
 mod ping;
+mod set_state;
 
 use crate::session::{Flow, Session};
 use naosoccer_proto::framed::WireError;
@@ -54,6 +55,7 @@ pub(crate) async fn dispatch(
             s.push_queued().await?;
             result
         }
+        ClientMsg::SetState(req) => set_state::handle(s, req).await,
         ClientMsg::Unknown => Err(ErrorMsg::new(
             ErrorCode::Unimplemented,
             "unknown message type; see docs/PROTOCOL.md for the list",

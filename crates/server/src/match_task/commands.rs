@@ -4,7 +4,8 @@
 use super::{MatchTask, Slot, Stop};
 use crate::match_msg::{deliver, send_observation, ConnEntry, ConnId, MatchCmd, Outgoing};
 use naosoccer_proto::msg::{ErrorCode, ErrorMsg, Joined, Mode, Player};
-use naosoccer_proto::{RobotId, Tick};
+use naosoccer_proto::{RobotId, StateChange, Tick};
+use naosoccer_referee::StateError;
 
 impl MatchTask {
     /// Takes a connection out of the match; its robots stand from now on.
@@ -20,9 +21,54 @@ impl MatchTask {
         Some(c)
     }
 
+    /// Sets the state now (the match has started; `change` was checked)
+    /// and tells the observer, so a recording re-applies it.
+    pub(super) fn apply_state(&mut self, change: &StateChange) {
+        let tick = self.game.tick();
+        match self.game.set_state(change) {
+            Ok(()) => {
+                tracing::info!(match_id = %self.params.id, tick = tick.get(), "state set by an admin");
+                if let Some(o) = &mut self.observer {
+                    o.on_state_set(tick, change, &self.game);
+                }
+            }
+            // Checked when it was accepted; nothing changed since that
+            // could refuse it. Logged rather than trusted blindly.
+            Err(e) => {
+                tracing::error!(match_id = %self.params.id, error = %e, "an accepted state change was refused")
+            }
+        }
+    }
+
+    /// `set_state`: checked now; applied now, or when the match starts if
+    /// it is still waiting for its players.
+    fn set_state(&mut self, change: StateChange) -> Result<Tick, ErrorMsg> {
+        let id = self.params.id;
+        if self.ending.is_some() {
+            let m = format!("match {id} has finished");
+            return Err(ErrorMsg::new(ErrorCode::FailedPrecondition, m));
+        }
+        self.game.check_state(&change).map_err(|e| match e {
+            StateError::Finished => ErrorMsg::new(
+                ErrorCode::FailedPrecondition,
+                format!("match {id} has finished"),
+            ),
+            e => ErrorMsg::new(ErrorCode::InvalidArgument, format!("invalid state: {e}")),
+        })?;
+        if self.started {
+            self.apply_state(&change);
+        } else {
+            self.queued.push(change);
+        }
+        Ok(self.game.tick())
+    }
+
     /// Applies one command; `Some` when it ends the match.
     pub(super) fn handle(&mut self, cmd: MatchCmd) -> Option<Stop> {
         match cmd {
+            MatchCmd::SetState { change, reply } => {
+                let _ = reply.send(self.set_state(change));
+            }
             MatchCmd::End { reply } => {
                 tracing::info!(match_id = %self.params.id, tick = self.game.tick().get(), "ended by an admin");
                 self.ended_by = Some(reply);

@@ -3,7 +3,9 @@
 
 use super::{MatchTask, Stop};
 use crate::match_msg::{deliver, Outgoing};
-use naosoccer_proto::msg::{EndReason, ErrorCode, ErrorMsg, MatchEnd, MatchState, PerTeam};
+use naosoccer_proto::msg::{
+    EndReason, ErrorCode, ErrorMsg, MatchEnd, MatchState, PerTeam, ScenarioEnd,
+};
 use naosoccer_proto::{Event, RobotId, Team, PLAYERS_PER_TEAM};
 
 impl MatchTask {
@@ -30,6 +32,7 @@ impl MatchTask {
             },
             events: self.unsent_events(reason),
             state_hash: format!("{:016x}", self.game.state_hash()),
+            scenario: self.scenario_end(),
         };
         if reason == EndReason::Internal {
             tracing::error!(match_id = %id, tick = end.tick.get(), "match task panicked; ending the match");
@@ -87,6 +90,18 @@ impl MatchTask {
         } else {
             self.events.to_vec()
         }
+    }
+
+    /// How the scenario's play ended, for a match started from one.
+    fn scenario_end(&self) -> Option<Box<ScenarioEnd>> {
+        let (name, _, team) = self.game.scenario()?;
+        Some(Box::new(ScenarioEnd {
+            name: name.to_owned(),
+            team,
+            ending: self.ending.map(|e| e.kind.name().to_owned()),
+            success: self.ending.map(|e| e.success),
+            ticks: self.game.tick().saturating_since(self.first_tick),
+        }))
     }
 
     fn misses_per_team(&self) -> PerTeam<[u64; PLAYERS_PER_TEAM]> {

@@ -2,7 +2,7 @@
 //! match id): its `MatchInfo`, first and as joins and leaves change it.
 
 use super::{MatchParams, MatchTask, Slot};
-use naosoccer_proto::msg::{Fill, MatchInfo, MatchState, PerTeam, Score};
+use naosoccer_proto::msg::{Fill, MatchInfo, MatchState, PerTeam, ScenarioInfo};
 use naosoccer_proto::{RobotId, PLAYERS_PER_TEAM};
 use naosoccer_referee::Match;
 
@@ -27,8 +27,12 @@ impl MatchTask {
             total_ticks: game.total_ticks(),
             deadline_ms: params.deadline.as_millis() as u64,
             start_players: params.start_players,
-            score: Score::default(),
+            score: game.score(),
             taken: PerTeam::default(),
+            scenario: game.scenario().map(|(name, _, team)| ScenarioInfo {
+                name: name.to_owned(),
+                team,
+            }),
         }
     }
 
