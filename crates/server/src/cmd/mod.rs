@@ -12,9 +12,42 @@ mod list_matches;
 mod ping;
 mod set_state;
 
+use crate::config::token_eq;
+use crate::match_msg::MatchCmd;
 use crate::session::{Flow, Session};
 use naosoccer_proto::framed::WireError;
-use naosoccer_proto::msg::{ClientMsg, ErrorCode, ErrorMsg, Undecodable};
+use naosoccer_proto::msg::{ClientMsg, ErrorCode, ErrorMsg, MatchId, Undecodable};
+use tokio::sync::oneshot;
+
+/// An admin request to match `id`'s task: refused without the admin token
+/// (`request` names it in the error), `not_found` for a match the server
+/// does not know, `failed_precondition` once the match has finished;
+/// otherwise `cmd` (built around the reply channel) goes to the match and
+/// its answer comes back.
+pub(crate) async fn ask_match<T>(
+    s: &Session,
+    request: &str,
+    token: &str,
+    id: MatchId,
+    cmd: impl FnOnce(oneshot::Sender<T>) -> MatchCmd,
+) -> Result<T, ErrorMsg> {
+    if !token_eq(token, &s.shared.tokens.admin) {
+        return Err(ErrorMsg::new(
+            ErrorCode::PermissionDenied,
+            format!("{request} needs the admin token"),
+        ));
+    }
+    let tx = s.shared.running_match(id)?;
+    let finished = || {
+        ErrorMsg::new(
+            ErrorCode::FailedPrecondition,
+            format!("match {id} has finished"),
+        )
+    };
+    let (reply_tx, reply_rx) = oneshot::channel();
+    tx.send(cmd(reply_tx)).await.map_err(|_| finished())?;
+    reply_rx.await.map_err(|_| finished())
+}
 
 /// Answers one request, in order.
 pub(crate) async fn dispatch(
