@@ -32,7 +32,17 @@ else:
     _IMPORT_ERROR = None
 
 #: Action names by index (a team uses the first ``n`` of them, see ``actions``).
-ACTION_NAMES = ("forward", "turn_left", "turn_right", "shoot", "stay", "pass", "support", "approach")
+ACTION_NAMES = (
+    "forward",
+    "turn_left",
+    "turn_right",
+    "shoot",
+    "stay",
+    "pass",
+    "support",
+    "approach",
+    "defend",
+)
 
 _TEAMS = ("blue", "red", "both")
 
@@ -69,7 +79,7 @@ class VectorEnv(_GymVectorEnv):
       ``team="both"``), each in its own team's frame, in layout
       ``obs_version`` (docs/PYTHON.md);
     * actions: ints ``(num_matches, robots)``, indices into
-      :data:`ACTION_NAMES` below the action count (5, or 6 to 8 with the
+      :data:`ACTION_NAMES` below the action count (5, or 6 to 9 with the
       ``decision`` settings of the shipped teams);
     * rewards: float32 ``(num_matches, robots)``, each robot's reward under
       the match configuration's ``[reward]``;

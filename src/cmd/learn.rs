@@ -67,7 +67,7 @@ pub struct TrainArgs {
     #[arg(long, value_name = "FILE", conflicts_with_all = [
         "algo", "steps", "resume", "preset", "persist", "no_shoot_mask", "pass_action",
         "support_action", "support_hold", "support_roles", "support_only", "support_spot",
-        "approach_action", "approach_only", "own_goal_guard", "init_from", "pass_init", "support_init_bias",
+        "approach_action", "approach_only", "defend_action", "own_goal_guard", "init_from", "pass_init", "support_init_bias",
         "central_critic", "minibatches", "entropy_coef", "gamma", "target_kl", "lr", "drill",
         "pass_drills", "pass_drill_seconds", "pass_drill_angle", "obs_version", "opponent",
         "matches", "threads", "torch_threads", "config", "minutes", "learners", "teammates",
@@ -164,6 +164,16 @@ pub struct TrainArgs {
     /// move by `approach` and `support` only (and `stay`, `shoot`, `pass`).
     #[arg(long, hide = true, requires = "approach_action")]
     approach_only: bool,
+    /// With --support-action: give the robots a ninth action, `defend`, a
+    /// walk back onto the line from the ball to the centre of the own goal,
+    /// 1 m from the ball (at least 0.3 m out from the goal), facing the ball
+    /// there: the step a team needs to stand between the ball and its goal.
+    /// Every robot may choose it, chaser or not; it holds like `support`
+    /// under --support-hold. Without --approach-action the network still
+    /// has `approach`'s output, always masked. Recorded in the run's
+    /// configuration.
+    #[arg(long, hide = true, requires = "support_action")]
+    defend_action: bool,
     /// Team presets: the own-goal guard. Near its own goal line (the ball
     /// within 0.6 m of it, in front of the goal) a robot facing its own
     /// goal with the ball just ahead may not walk `forward` or `shoot`, so
@@ -400,6 +410,7 @@ pub(crate) fn run_train(a: TrainArgs, tick: &mut dyn FnMut()) -> anyhow::Result<
         }
         d.approach = a.approach_action;
         d.approach_only = a.approach_only;
+        d.defend = a.defend_action;
         let sim = &cfg.match_config.sim;
         d.own_goal_guard = a
             .own_goal_guard

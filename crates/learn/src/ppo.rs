@@ -34,6 +34,7 @@ use crate::run::resume::{read_checkpoint, ResumeState};
 use crate::run::{make_env, Run, TrainSummary};
 use crate::warm_start::{init_weights, SUPPORT_INIT_BIAS};
 use crate::LearnError;
+use naosoccer_policy::actions::ActionSet;
 
 pub use naosoccer_policy::actions::{
     action_count, action_mask, sample, shoot_mask, DecisionConfig, NetAction, ACTIONS,
@@ -217,7 +218,7 @@ impl Ppo {
         &mut self,
         obs: &[f32],
         shoot_ok: &[bool],
-        banned: &[u8],
+        banned: &[ActionSet],
         rng: &mut ChaCha8Rng,
         actions: &mut [usize],
         logp: &mut [f32],
@@ -387,7 +388,7 @@ pub struct Transitions {
     /// The actions banned beyond a `shoot` out of reach
     /// ([`naosoccer_policy::actions::banned_actions`]; empty without the
     /// `pass` action).
-    pub banned: Vec<u8>,
+    pub banned: Vec<ActionSet>,
     /// V(s) at the decision, in return units.
     pub values: Vec<f32>,
     /// `sum_{i < dt} gamma^i r_i`: the rewards until the next decision.

@@ -1419,6 +1419,58 @@ fn init_from_widens_the_actor_for_the_approach_action() {
     }
 }
 
+/// `--init-from` with `defend`: a seven- or eight-action team seeds a
+/// nine-action actor. The old logits carry over, a gained `approach`
+/// starts as `forward`, and `defend` as `support` with its bias lowered by
+/// the support bias, so it starts rarer than the walk it resembles.
+#[test]
+fn init_from_widens_the_actor_for_the_defend_action() {
+    use naosoccer_learn::ppo::Ppo;
+    use naosoccer_learn::warm_start::init_weights;
+    use naosoccer_policy::NetAction;
+    let _g = torch_lock();
+    let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
+    let [_, _, seven, eight] = widening_configs();
+    let mut nine = seven.clone();
+    nine.decision.as_mut().unwrap().defend = true;
+    assert_eq!(nine.actions(), 9);
+    let dir = out_dir("init_from_defend");
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 5;
+    let rows = random_rows(7, n);
+    let logits = |p: &Ppo| actor_logits(p, &rows, n);
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-5;
+    for (from, k) in [(seven, 7usize), (eight, 8)] {
+        let src = Ppo::new(from, &scale, 4).unwrap();
+        let file = dir.join(format!("from{k}.safetensors"));
+        naosoccer_learn::policy::save_stores(&[&src.net.vs], &file).unwrap();
+        let before = logits(&src);
+        let mut dst = Ppo::new(nine.clone(), &scale, 4).unwrap();
+        init_weights(&mut dst, &file, Action::Shoot, 0.75).unwrap();
+        let after = logits(&dst);
+        for i in 0..n {
+            for a in 0..k {
+                assert!(
+                    close(after[i * 9 + a], before[i * k + a]),
+                    "{k}: row {i}, action {a}"
+                );
+            }
+            if k == 7 {
+                assert!(
+                    close(after[i * 9 + NetAction::Approach.index()], before[i * k]),
+                    "{k}: row {i}"
+                );
+            }
+            let support = before[i * k + NetAction::Support.index()];
+            assert!(
+                close(after[i * 9 + NetAction::Defend.index()], support - 0.75),
+                "{k}: row {i}: defend {} support {support}",
+                after[i * 9 + NetAction::Defend.index()]
+            );
+        }
+    }
+}
+
 /// The trainer itself (not only the CLI) refuses decision settings that
 /// lack what they build on: `approach` or a support spot without
 /// `support`, `approach_only` without `approach`, roles without `support`.
@@ -1441,6 +1493,7 @@ fn decision_settings_without_their_prerequisites_are_refused() {
         assert!(err.contains(needle), "{err}");
     };
     refused(&|d| d.approach = true, "--support-action");
+    refused(&|d| d.defend = true, "--support-action");
     refused(
         &|d| d.support_spot = SupportSpot::Facing,
         "--support-action",

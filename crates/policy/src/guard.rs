@@ -11,7 +11,7 @@
 use naosoccer_proto::Observation;
 use serde::{Deserialize, Serialize};
 
-use crate::actions::NetAction;
+use crate::actions::{ActionSet, NetAction};
 
 /// Where the guard holds, in the team's frame (own goal at x = -`half_length`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -44,7 +44,7 @@ impl OwnGoalGuard {
     /// faces its own goal line (its heading points toward -x by more than
     /// 0.2 of its length). Turning, `stay`, `pass` and the walking actions
     /// stay open.
-    pub fn banned(&self, obs: &Observation) -> u8 {
+    pub fn banned(&self, obs: &Observation) -> ActionSet {
         let me = obs.me();
         let ball = [obs.ball.x, obs.ball.y];
         let near_goal =

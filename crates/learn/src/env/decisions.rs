@@ -14,7 +14,7 @@
 //! observations and masks), the learner's choice, [`Decisions::decide`],
 //! [`VecEnv::step`] with [`Decisions::actions`], [`Decisions::observe`].
 
-use naosoccer_policy::actions::{banned_actions, DecisionConfig, Hold, NetAction};
+use naosoccer_policy::actions::{banned_actions, ActionSet, DecisionConfig, Hold, NetAction};
 
 use crate::env::VecEnv;
 use crate::obs::{ObsScale, OBS_DIM};
@@ -24,7 +24,7 @@ use crate::obs::{ObsScale, OBS_DIM};
 struct Open<P> {
     action: usize,
     shoot_ok: bool,
-    banned: u8,
+    banned: ActionSet,
     /// `sum gamma^i r_i` so far, and `gamma^ticks`.
     reward: f32,
     discount: f32,
@@ -63,7 +63,7 @@ pub struct Closed<'a, P> {
     /// The masks it decided under: `shoot` possible, and the other actions
     /// banned ([`banned_actions`]).
     pub shoot_ok: bool,
-    pub banned: u8,
+    pub banned: ActionSet,
     /// The rewards of the ticks it lasted, discounted to its start, and
     /// `gamma^ticks`.
     pub reward: f32,
@@ -85,7 +85,7 @@ pub struct Asked {
     /// Whether `shoot` is possible (always, without the shoot mask).
     pub shoot_ok: Vec<bool>,
     /// What else each may not choose ([`banned_actions`]).
-    pub banned: Vec<u8>,
+    pub banned: Vec<ActionSet>,
 }
 
 /// Holds and open decisions of every learning robot of a [`VecEnv`];

@@ -92,11 +92,11 @@ pub(crate) fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
     if decisions
         .iter()
         .flatten()
-        .any(|d| (d.approach || d.support_spot != Default::default()) && !d.support)
+        .any(|d| (d.approach || d.defend || d.support_spot != Default::default()) && !d.support)
     {
         return Err(LearnError::Config(
-            "--approach-action and --support-spot come with the support action: they need \
-             --support-action"
+            "--approach-action, --defend-action and --support-spot come with the support \
+             action: they need --support-action"
                 .into(),
         ));
     }

@@ -4,7 +4,8 @@
 use naosoccer_proto::{Observation, Tick};
 
 use super::{
-    support_spot, DecisionConfig, NetAction, SupportSpot, SUPPORT_ARRIVE, SUPPORT_RELEASE_BALL,
+    defend_spot, support_spot, DecisionConfig, NetAction, SupportSpot, SUPPORT_ARRIVE,
+    SUPPORT_RELEASE_BALL,
 };
 
 /// One robot's decision state in the decision-level MDP (`team` preset):
@@ -16,8 +17,9 @@ pub struct Hold {
     action: NetAction,
     until: Tick,
     last_tick: Option<Tick>,
-    /// A `support` held to its spot ([`DecisionConfig::support_hold`]):
-    /// from this tick on it also ends on arrival or with the ball near.
+    /// A `support` or `defend` held to its spot
+    /// ([`DecisionConfig::support_hold`]): from this tick on it also ends on
+    /// arrival or with the ball near.
     release_from: Option<Tick>,
     /// The pitch's half length and half width (m), and where the spot is.
     half: [f32; 2],
@@ -27,8 +29,8 @@ pub struct Hold {
 impl Hold {
     /// Whether the robot that received `obs` decides now: it is free to act
     /// (not lying, not busy in a kick) and its last decision's persistence
-    /// has run out (for a `support` held to its spot: also once it arrived
-    /// or the ball came near). A tick earlier than the last one seen is a
+    /// has run out (for a `support` or `defend` held to its spot: also once
+    /// it arrived or the ball came near). A tick earlier than the last one seen is a
     /// new match.
     pub fn must_decide(&mut self, obs: &Observation) -> bool {
         if self.last_tick.is_some_and(|t| obs.tick < t) {
@@ -44,7 +46,11 @@ impl Hold {
         match self.release_from {
             Some(from) if obs.tick >= from => {
                 let me = obs.me();
-                let spot = support_spot(obs, self.half, self.spot);
+                let spot = if self.action == NetAction::Defend {
+                    defend_spot(obs, self.half)
+                } else {
+                    support_spot(obs, self.half, self.spot)
+                };
                 let arrived = (spot[0] - me.x).hypot(spot[1] - me.y) <= SUPPORT_ARRIVE;
                 let ball_near =
                     (obs.ball.x - me.x).hypot(obs.ball.y - me.y) <= SUPPORT_RELEASE_BALL;
@@ -67,8 +73,8 @@ impl Hold {
     /// Records a decision at `tick` under `decision`, on a pitch of half
     /// length and half width `half` (m): a movement lasts `persist` ticks, a
     /// `shoot` or `pass` one (the kick then keeps the robot busy), a
-    /// `support` with `support_hold` until its robot arrives, the ball
-    /// comes near or `support_hold` ticks pass.
+    /// `support` or `defend` with `support_hold` until its robot arrives,
+    /// the ball comes near or `support_hold` ticks pass.
     pub fn start(
         &mut self,
         action: NetAction,
@@ -81,7 +87,9 @@ impl Hold {
         self.release_from = None;
         let ticks = if action.is_kick() {
             1
-        } else if action == NetAction::Support && u64::from(decision.support_hold) > persist {
+        } else if matches!(action, NetAction::Support | NetAction::Defend)
+            && u64::from(decision.support_hold) > persist
+        {
             self.release_from = Some(tick + persist);
             self.half = half;
             self.spot = decision.support_spot;

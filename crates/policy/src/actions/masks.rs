@@ -3,7 +3,7 @@
 
 use naosoccer_proto::Observation;
 
-use super::{DecisionConfig, NetAction, ACTIONS, MASKED_LOGIT};
+use super::{ActionSet, DecisionConfig, NetAction, ACTIONS, MASKED_LOGIT};
 
 /// Whether the robot that received `obs` may `pass` now: the ball is in
 /// kick reach (`in_reach`, from the encoder) and there is a receiver.
@@ -57,16 +57,16 @@ pub(super) fn nearest_standing_teammate(obs: &Observation) -> Option<(f32, usize
 /// The actions a robot that is not one of its team's chasers may not choose
 /// under [`DecisionConfig::chasers`], as bits (`1 << index`): `forward` and
 /// the turns (and `approach`, for a team that has it).
-pub const ROLE_BANNED: u8 =
+pub const ROLE_BANNED: ActionSet =
     NetAction::Forward.bit() | NetAction::TurnLeft.bit() | NetAction::TurnRight.bit();
 
 /// What a robot that does not chase may not choose under
 /// [`DecisionConfig::support_only`]: [`ROLE_BANNED`] and `stay`.
-pub const SUPPORT_ONLY_BANNED: u8 = ROLE_BANNED | NetAction::Stay.bit();
+pub const SUPPORT_ONLY_BANNED: ActionSet = ROLE_BANNED | NetAction::Stay.bit();
 
 /// What no robot may choose under [`DecisionConfig::approach_only`]:
 /// `forward` and the turns, the bits of [`ROLE_BANNED`].
-pub const APPROACH_ONLY_BANNED: u8 = ROLE_BANNED;
+pub const APPROACH_ONLY_BANNED: ActionSet = ROLE_BANNED;
 
 /// The actions, beyond a `shoot` out of reach, that the robot that received
 /// `obs` may not choose now under `decision`, as bits (`1 << index`):
@@ -74,15 +74,19 @@ pub const APPROACH_ONLY_BANNED: u8 = ROLE_BANNED;
 /// encoder); [`ROLE_BANNED`] (and `approach`) for a robot that is not a
 /// chaser under [`DecisionConfig::chasers`] ([`SUPPORT_ONLY_BANNED`] with
 /// [`DecisionConfig::support_only`]); [`APPROACH_ONLY_BANNED`] for every
-/// robot under [`DecisionConfig::approach_only`]; `forward` and `shoot`
-/// where [`DecisionConfig::own_goal_guard`] holds.
-pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> u8 {
+/// robot under [`DecisionConfig::approach_only`]; `approach` always for a
+/// team with `defend` but not `approach`; `forward` and `shoot` where
+/// [`DecisionConfig::own_goal_guard`] holds.
+pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> ActionSet {
     let mut banned = decision.own_goal_guard.map_or(0, |g| g.banned(obs));
     if decision.pass && !pass_possible(obs, in_reach) {
         banned |= NetAction::Pass.bit();
     }
     if decision.approach_only {
         banned |= APPROACH_ONLY_BANNED;
+    }
+    if decision.defend && !decision.approach {
+        banned |= NetAction::Approach.bit();
     }
     if decision.chasers > 0 && !is_chaser(obs, decision.chasers) {
         banned |= if decision.support_only {
@@ -105,7 +109,7 @@ pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
 
 /// The bans of row `i` of `banned` ([`banned_actions`]) for rows of
 /// `actions` actions: a row beyond `banned` may not `pass`.
-pub fn row_bans(banned: &[u8], i: usize, actions: usize) -> u8 {
+pub fn row_bans(banned: &[ActionSet], i: usize, actions: usize) -> ActionSet {
     let pass = NetAction::Pass;
     let missing = if actions > pass.index() {
         pass.bit()
@@ -117,7 +121,7 @@ pub fn row_bans(banned: &[u8], i: usize, actions: usize) -> u8 {
 
 /// Adds [`MASKED_LOGIT`] to the entries of `row` (one row of logits) that
 /// `bans` ([`banned_actions`]) bans.
-pub fn mask_row(row: &mut [f32], bans: u8) {
+pub fn mask_row(row: &mut [f32], bans: ActionSet) {
     for (x, a) in row.iter_mut().zip(NetAction::ALL) {
         if bans & a.bit() != 0 {
             *x += MASKED_LOGIT;
@@ -128,7 +132,7 @@ pub fn mask_row(row: &mut [f32], bans: u8) {
 /// Additive logit masks for rows of `actions` logits: [`MASKED_LOGIT`] on
 /// `shoot` where `shoot_ok` is false and on what `banned` bans
 /// ([`banned_actions`]; a row beyond it may not `pass`).
-pub fn action_mask(shoot_ok: &[bool], banned: &[u8], actions: usize) -> Vec<f32> {
+pub fn action_mask(shoot_ok: &[bool], banned: &[ActionSet], actions: usize) -> Vec<f32> {
     let mut m = vec![0.0; shoot_ok.len() * actions];
     for (i, (&ok, row)) in shoot_ok.iter().zip(m.chunks_exact_mut(actions)).enumerate() {
         if !ok {

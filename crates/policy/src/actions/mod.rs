@@ -23,9 +23,10 @@ pub use masks::{
     APPROACH_ONLY_BANNED, ROLE_BANNED, SUPPORT_ONLY_BANNED,
 };
 pub use steps::{
-    approach_action, support_action, support_spot, to_action, APPROACH_ALIGN, APPROACH_BEHIND,
-    APPROACH_LATERAL, APPROACH_MIN_CONE, APPROACH_NEAR, SUPPORT_AHEAD, SUPPORT_ARRIVE,
-    SUPPORT_FACE_CONE, SUPPORT_RELEASE_BALL, SUPPORT_SIDE, SUPPORT_WALK_CONE,
+    approach_action, defend_action, defend_spot, support_action, support_spot, to_action,
+    walk_spot, APPROACH_ALIGN, APPROACH_BEHIND, APPROACH_LATERAL, APPROACH_MIN_CONE, APPROACH_NEAR,
+    DEFEND_BEHIND, DEFEND_GOAL_MIN, SUPPORT_AHEAD, SUPPORT_ARRIVE, SUPPORT_FACE_CONE,
+    SUPPORT_RELEASE_BALL, SUPPORT_SIDE, SUPPORT_WALK_CONE,
 };
 
 /// One output of a team's network: the protocol's actions, in
@@ -55,6 +56,9 @@ pub enum NetAction {
     /// A walk round behind the ball onto the line to the opponent goal,
     /// then into the ball ([`approach_action`]).
     Approach,
+    /// A walk back onto the line from the ball to the own goal, between
+    /// them ([`defend_action`]).
+    Defend,
 }
 
 impl NetAction {
@@ -68,6 +72,7 @@ impl NetAction {
         NetAction::Pass,
         NetAction::Support,
         NetAction::Approach,
+        NetAction::Defend,
     ];
 
     /// The network output this action is.
@@ -81,8 +86,8 @@ impl NetAction {
     }
 
     /// This action's bit in a ban set (`1 << index`, [`banned_actions`]).
-    pub const fn bit(self) -> u8 {
-        1 << self as u8
+    pub const fn bit(self) -> ActionSet {
+        1 << self as ActionSet
     }
 
     /// The name the docs and the Python package use.
@@ -96,6 +101,7 @@ impl NetAction {
             NetAction::Pass => "pass",
             NetAction::Support => "support",
             NetAction::Approach => "approach",
+            NetAction::Defend => "defend",
         }
     }
 
@@ -109,9 +115,13 @@ impl NetAction {
 /// `support` or `approach` have this many outputs.
 pub const ACTIONS: usize = 5;
 
-/// The most actions a network has (the paper's five, `pass`, `support`
-/// and `approach`).
-pub const MAX_ACTIONS: usize = 8;
+/// The most actions a network has (the paper's five, `pass`, `support`,
+/// `approach` and `defend`).
+pub const MAX_ACTIONS: usize = 9;
+
+/// A set of network actions, one bit each (`1 << index`): the bans of
+/// [`banned_actions`].
+pub type ActionSet = u16;
 
 /// The actions' names, by index ([`NetAction::name`]).
 pub const ACTION_NAMES: [&str; MAX_ACTIONS] = {
@@ -197,6 +207,14 @@ pub struct DecisionConfig {
     /// from older runs' configurations: `false`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub approach_only: bool,
+    /// The robots have a ninth action, `defend` (needs `support`): walk back
+    /// onto the line from the ball to the centre of the own goal, between
+    /// them ([`defend_action`]), and face the ball there. Possible for every
+    /// robot, chaser or not; held like `support` under `support_hold`. A
+    /// team with `defend` but not `approach` has `approach`'s output too,
+    /// always masked. Absent from older runs' configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub defend: bool,
     /// The own-goal guard ([`OwnGoalGuard`]): near its own goal a robot
     /// facing that goal may not walk into the ball or kick it. Absent from
     /// older runs' configurations: off.
@@ -246,13 +264,18 @@ impl DecisionConfig {
             support_spot: SupportSpot::Ahead,
             approach: false,
             approach_only: false,
+            defend: false,
             own_goal_guard: None,
         }
     }
 
     /// How many actions the networks choose among: 5, 6 with `pass`, 7
-    /// with `pass` and `support`, 8 with `approach` too.
+    /// with `pass` and `support`, 8 with `approach` too, 9 with `defend`
+    /// (whose `approach` output is masked without `approach`).
     pub fn actions(&self) -> usize {
+        if self.support && self.defend {
+            return NetAction::Defend.index() + 1;
+        }
         match (self.pass, self.support, self.approach) {
             (_, true, true) => NetAction::Approach.index() + 1,
             (_, true, false) => NetAction::Support.index() + 1,

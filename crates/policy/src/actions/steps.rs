@@ -1,5 +1,5 @@
 //! What the actions that are not protocol actions turn into: the
-//! `support` and `approach` steps, the support spot, and their tuning.
+//! `support`, `approach` and `defend` steps, their spots, and their tuning.
 
 use naosoccer_proto::{Action, Observation};
 use naosoccer_referee::rules::wrap_angle;
@@ -44,10 +44,20 @@ pub const APPROACH_LATERAL: f32 = 0.06;
 /// ...but never for an angle error below this (rad).
 pub const APPROACH_MIN_CONE: f32 = 0.12;
 
+/// `defend` walks to this far from the ball (m) on the line from the ball
+/// to the centre of the own goal: between the ball and the goal, near
+/// enough to meet a dribble, as the scripted team's covering player stays
+/// 1.2 m behind the ball.
+pub const DEFEND_BEHIND: f32 = 1.0;
+/// ...but never nearer the own goal's centre than this (m), so that a
+/// defender stands in front of its goal, not in it.
+pub const DEFEND_GOAL_MIN: f32 = 0.3;
+
 /// The protocol action the network action `a` stands for in the state
 /// `obs`, on a pitch of half length and half width `half`: itself for the
 /// protocol's actions, the step toward the support spot (placed as `spot`
-/// says) for `support`, the step of [`approach_action`] for `approach`.
+/// says) for `support`, the step of [`approach_action`] for `approach`,
+/// the step of [`defend_action`] for `defend`.
 pub fn to_action(a: NetAction, obs: &Observation, half: [f32; 2], spot: SupportSpot) -> Action {
     match a {
         NetAction::Forward => Action::Forward,
@@ -58,6 +68,7 @@ pub fn to_action(a: NetAction, obs: &Observation, half: [f32; 2], spot: SupportS
         NetAction::Pass => Action::Pass,
         NetAction::Support => support_action(obs, half, spot),
         NetAction::Approach => approach_action(obs, half),
+        NetAction::Defend => defend_action(obs, half),
     }
 }
 
@@ -141,12 +152,52 @@ pub fn approach_action(obs: &Observation, half: [f32; 2]) -> Action {
 /// Stateless, so it is the same step in training, in process and over the
 /// socket.
 pub fn support_action(obs: &Observation, half: [f32; 2], spot: SupportSpot) -> Action {
+    walk_spot(obs, support_spot(obs, half, spot))
+}
+
+/// The `defend` action's step for the robot that received `obs`, on a
+/// pitch of half length and half width `half` (m): a walk to its defending
+/// spot ([`defend_spot`]), turning toward it until it is within
+/// [`SUPPORT_WALK_CONE`]; arrived (within [`SUPPORT_ARRIVE`]), it turns to
+/// face the ball. Stateless, so it is the same step in training, in
+/// process and over the socket.
+pub fn defend_action(obs: &Observation, half: [f32; 2]) -> Action {
+    walk_spot(obs, defend_spot(obs, half))
+}
+
+/// The defending spot of the robot that received `obs` (observation frame,
+/// the own goal's centre at (-half length, 0), m): on the line from the
+/// ball to that centre, [`DEFEND_BEHIND`] from the ball, but at least
+/// [`DEFEND_GOAL_MIN`] from the goal's centre (the ball nearer its goal
+/// than that: the point that far out toward the ball), and at least 0.1 m
+/// in front of the goal line.
+pub fn defend_spot(obs: &Observation, half: [f32; 2]) -> [f32; 2] {
+    let goal = [-half[0], 0.0];
+    let (dx, dy) = (obs.ball.x - goal[0], obs.ball.y - goal[1]);
+    let len = dx.hypot(dy);
+    let (ux, uy) = if len > 1e-6 {
+        (dx / len, dy / len)
+    } else {
+        (1.0, 0.0)
+    };
+    let from_goal = (len - DEFEND_BEHIND).max(DEFEND_GOAL_MIN);
+    [
+        (goal[0] + ux * from_goal).max(goal[0] + 0.1),
+        (goal[1] + uy * from_goal).clamp(-half[1], half[1]),
+    ]
+}
+
+/// The step of a robot that received `obs` walking to `spot` (observation
+/// frame, m) and facing the ball there: away from the spot it turns
+/// toward it until the spot is within [`SUPPORT_WALK_CONE`] and walks;
+/// within [`SUPPORT_ARRIVE`] of it, it turns until the ball is within
+/// [`SUPPORT_FACE_CONE`] and stays. A lying robot stays.
+pub fn walk_spot(obs: &Observation, spot: [f32; 2]) -> Action {
     let me = obs.me();
     if me.fallen {
         return Action::Stay;
     }
     let (bx, by) = (obs.ball.x, obs.ball.y);
-    let spot = support_spot(obs, half, spot);
     let (dx, dy) = (spot[0] - me.x, spot[1] - me.y);
     let (target, cone, arrived) = if dx.hypot(dy) > SUPPORT_ARRIVE {
         ([dx, dy], SUPPORT_WALK_CONE, false)

@@ -26,11 +26,11 @@ use std::path::Path;
 use crate::Policy;
 use naosoccer_proto::{Action, Observation, Tick};
 
-use crate::actions::MASKED_LOGIT;
 use crate::actions::{
     action_count, argmax, banned_actions, mask_row, row_bans, sample, sample_uniform, to_action,
     DecisionConfig, Hold, NetAction, SupportSpot, ACTIONS,
 };
+use crate::actions::{ActionSet, MASKED_LOGIT};
 use crate::mlp::{Activation, Mlp, Weights};
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::PolicyError;
@@ -95,7 +95,7 @@ pub struct LearnedPolicy {
     /// Per row of the decision in progress: the actions it may not choose
     /// beyond a `shoot` out of reach ([`banned_actions`], filled from the
     /// observations by `act_matches`; a row beyond it cannot pass).
-    banned: Vec<u8>,
+    banned: Vec<ActionSet>,
 }
 
 impl std::fmt::Debug for LearnedPolicy {
@@ -431,7 +431,7 @@ impl LearnedPolicy {
         self.probabilities_masked(&feats, &banned)
     }
 
-    fn probabilities_masked(&self, obs: &[f32], banned: &[u8]) -> Vec<f32> {
+    fn probabilities_masked(&self, obs: &[f32], banned: &[ActionSet]) -> Vec<f32> {
         let mut p = self.outputs(obs, 0);
         let masks = self.masks_shoot();
         for (i, row) in p.chunks_exact_mut(self.actions).enumerate() {
