@@ -207,3 +207,30 @@ fn a_held_defend_ends_on_arrival() {
         (spot[0] - me.x).hypot(spot[1] - me.y)
     );
 }
+
+/// A robot straight upfield of the ball, facing its own goal: `defend`
+/// goes round the ball rather than through it, so the ball is not pushed
+/// toward the goal, and the robot still reaches its spot.
+#[test]
+fn defend_goes_round_a_ball_in_its_way() {
+    let mut m = staged(1, (0.6, 0.05, PI), (-0.5, 0.0));
+    let h = half(&m);
+    let ball0 = m.observe(Team::Blue, 1).ball;
+    let mut arrived = false;
+    for t in 0..1500 {
+        let obs = m.observe(Team::Blue, 1);
+        let moved = (obs.ball.x - ball0.x).hypot(obs.ball.y - ball0.y);
+        assert!(moved < 0.05, "tick {t}: the ball was pushed {moved} m");
+        let spot = defend_spot(&obs, h);
+        let me = obs.me();
+        let step = defend_action(&obs, h);
+        if (spot[0] - me.x).hypot(spot[1] - me.y) <= SUPPORT_ARRIVE && step == Action::Stay {
+            arrived = true;
+            break;
+        }
+        let mut joint = [Action::Stay; ROBOTS];
+        joint[1] = step;
+        m.step(&joint);
+    }
+    assert!(arrived, "never reached the defending spot");
+}

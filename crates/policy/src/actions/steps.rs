@@ -52,6 +52,11 @@ pub const DEFEND_BEHIND: f32 = 1.0;
 /// ...but never nearer the own goal's centre than this (m), so that a
 /// defender stands in front of its goal, not in it.
 pub const DEFEND_GOAL_MIN: f32 = 0.3;
+/// A `defend` whose straight walk would pass the ball nearer than this
+/// (m, centre to centre) goes round the ball instead...
+pub const DEFEND_CLEARANCE: f32 = 0.35;
+/// ...by a point this far (m) beside the ball.
+pub const DEFEND_WIDE: f32 = 0.55;
 
 /// The protocol action the network action `a` stands for in the state
 /// `obs`, on a pitch of half length and half width `half`: itself for the
@@ -159,10 +164,61 @@ pub fn support_action(obs: &Observation, half: [f32; 2], spot: SupportSpot) -> A
 /// pitch of half length and half width `half` (m): a walk to its defending
 /// spot ([`defend_spot`]), turning toward it until it is within
 /// [`SUPPORT_WALK_CONE`]; arrived (within [`SUPPORT_ARRIVE`]), it turns to
-/// face the ball. Stateless, so it is the same step in training, in
-/// process and over the socket.
+/// face the ball. A robot whose straight walk to the spot would pass
+/// within [`DEFEND_CLEARANCE`] of the ball (it stands upfield of the ball)
+/// goes round it first, to [`DEFEND_WIDE`] beside the ball on the side it
+/// stands, so that it does not push the ball toward its own goal on the
+/// way back. Stateless, so it is the same step in training, in process and
+/// over the socket.
 pub fn defend_action(obs: &Observation, half: [f32; 2]) -> Action {
-    walk_spot(obs, defend_spot(obs, half))
+    let spot = defend_spot(obs, half);
+    let me = obs.me();
+    let ball = [obs.ball.x, obs.ball.y];
+    let path = [spot[0] - me.x, spot[1] - me.y];
+    let len2 = path[0] * path[0] + path[1] * path[1];
+    let t = if len2 > 1e-9 {
+        ((ball[0] - me.x) * path[0] + (ball[1] - me.y) * path[1]) / len2
+    } else {
+        -1.0
+    };
+    let target = if (0.0..1.0).contains(&t) {
+        let near = [me.x + t * path[0], me.y + t * path[1]];
+        if (ball[0] - near[0]).hypot(ball[1] - near[1]) < DEFEND_CLEARANCE {
+            // Beside the ball, across the line from the ball to the spot,
+            // on the side the robot stands.
+            let (ux, uy) = {
+                let d = [spot[0] - ball[0], spot[1] - ball[1]];
+                let l = d[0].hypot(d[1]).max(1e-6);
+                (d[0] / l, d[1] / l)
+            };
+            let across = ux * (me.y - ball[1]) - uy * (me.x - ball[0]);
+            let side = if across >= 0.0 { 1.0 } else { -1.0 };
+            [
+                ball[0] - uy * side * DEFEND_WIDE,
+                ball[1] + ux * side * DEFEND_WIDE,
+            ]
+        } else {
+            spot
+        }
+    } else {
+        spot
+    };
+    if target == spot {
+        walk_spot(obs, spot)
+    } else if me.fallen {
+        Action::Stay
+    } else {
+        let err = wrap_angle((target[1] - me.y).atan2(target[0] - me.x) - me.heading);
+        if err.abs() > SUPPORT_WALK_CONE {
+            if err > 0.0 {
+                Action::TurnLeft
+            } else {
+                Action::TurnRight
+            }
+        } else {
+            Action::Forward
+        }
+    }
 }
 
 /// The defending spot of the robot that received `obs` (observation frame,
