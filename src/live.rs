@@ -23,7 +23,7 @@ use anyhow::Context as _;
 use foxglove::messages::{log, FrameTransforms, Log, SceneEntity, SceneUpdate, TextPrimitive};
 use foxglove::websocket::{ChannelView, Client, ServerListener};
 use foxglove::{Context, Encode, PartialMetadata, RawChannel, Schema, WebSocketServerHandle};
-use naosoccer_proto::{Event, MatchStats, Tick};
+use naosoccer_proto::{Event, MatchStats, Team, Tick};
 use naosoccer_record::foxglove as scene;
 use naosoccer_record::StateRecord;
 use naosoccer_referee::Match;
@@ -175,6 +175,10 @@ pub struct MatchStream {
     bodies: Vec<u8>,
     /// Where the scoreboard floats: above the far touch line.
     board_y: f32,
+    /// The scenario the match started from (docs/SCENARIOS.md): its name
+    /// and the colour of its own team, shown on the scoreboard and sent
+    /// with the score.
+    scenario: Option<(String, Team)>,
     buf: Vec<u8>,
 }
 
@@ -229,6 +233,7 @@ impl MatchStream {
             pitch: Vec::new(),
             bodies: Vec::new(),
             board_y: 0.0,
+            scenario: None,
             buf: Vec::with_capacity(4096),
         })
     }
@@ -252,8 +257,10 @@ impl MatchStream {
         .any(|c| c.has_sinks())
     }
 
-    /// Takes the scene (pitch, robot bodies, ball) from `m` at kick-off.
+    /// Takes the scene (pitch, robot bodies, ball) and the scenario, if
+    /// any, from `m` at kick-off.
     pub fn begin(&mut self, m: &Match) {
+        self.scenario = m.scenario().map(|(name, _, own)| (name.to_string(), own));
         let update = |entities| SceneUpdate {
             deletions: Vec::new(),
             entities,
@@ -298,10 +305,13 @@ impl MatchStream {
         self.publish_events(events, now);
         let secs = state.time.max(0.0) as u64;
         let clock = format!("{:02}:{:02}", secs / 60, secs % 60);
-        let text = format!(
+        let mut text = format!(
             "blue {} - {} red   {clock}",
             state.score.blue, state.score.red
         );
+        if let Some((name, own)) = &self.scenario {
+            text = format!("{name} ({own}): {text}");
+        }
         if self.scene.has_sinks() {
             // One SceneUpdate with the entities [pitch?, bodies, scoreboard]:
             // the encoded updates one after the other (the static parts
@@ -331,8 +341,11 @@ impl MatchStream {
             }
         }
         if self.score.has_sinks() {
-            let msg = json!({"tick": state.tick, "time": state.time, "clock": clock,
+            let mut msg = json!({"tick": state.tick, "time": state.time, "clock": clock,
                 "blue": state.score.blue, "red": state.score.red, "text": text});
+            if let Some((name, own)) = &self.scenario {
+                msg["scenario"] = json!({"name": name, "team": own});
+            }
             if let Ok(b) = serde_json::to_vec(&msg) {
                 self.score.log_with_meta(&b, meta);
             }

@@ -150,9 +150,9 @@ fn stream_recording(rec: &Recording, addr: &str, args: &ReplayArgs) -> anyhow::R
     );
     let server = LiveServer::start(addr)?;
     let mut stream = server.stream(rec.meta.match_id.unwrap_or(1))?;
-    // The scene's geometry comes from the recorded configuration.
-    let m = naosoccer_referee::Match::new(&rec.meta.config, rec.meta.seed)
-        .context("re-creating the recorded match")?;
+    // The scene's geometry comes from the recorded configuration, the
+    // scoreboard's name from the recorded scenario.
+    let m = naosoccer_record::recorded_start(rec).context("re-creating the recorded match")?;
     stream.begin(&m);
     if args.wait_viewer && !server.wait_for_viewer(std::time::Duration::from_secs(600)) {
         anyhow::bail!("no viewer subscribed within 10 minutes");

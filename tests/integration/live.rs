@@ -172,6 +172,47 @@ async fn match_live_streams_the_scene_and_changes_nothing() {
     );
 }
 
+/// A match started from a scenario names it on the live scoreboard and in
+/// the score messages, and plays the same as unwatched.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn match_live_names_its_scenario() {
+    let scenario = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/scenarios/empty-goal.toml"
+    );
+    let base = ["match", "--scenario", scenario, "--seed", "4", "--json"];
+    let mut args = base.to_vec();
+    args.extend(["--live", "127.0.0.1:0", "--speed", "100", "--wait-viewer"]);
+    let (child, addr) = spawn_live(&args);
+    let (mut ws, ch) = watch(&addr).await;
+    ws.subscribe(&[(4, &ch["/match/1/score"]), (1, &ch["/match/1/scene"])])
+        .await
+        .unwrap();
+    let mut scores = 0;
+    while let Some((sub, v)) = ws.next_data().await {
+        if sub != 4 {
+            continue;
+        }
+        let text = v["text"].as_str().unwrap_or_default();
+        assert!(
+            text.starts_with("empty-goal (blue): blue ") && text.contains(" red "),
+            "{v}"
+        );
+        assert_eq!(v["scenario"]["name"], "empty-goal", "{v}");
+        assert_eq!(v["scenario"]["team"], "blue", "{v}");
+        scores += 1;
+        if scores == 20 {
+            break;
+        }
+    }
+    ws.close().await;
+    assert_eq!(scores, 20, "the stream ended early");
+    assert_eq!(
+        state_hash(child.wait_with_output().unwrap()),
+        unwatched_hash(&base)
+    );
+}
+
 /// A viewer that subscribes to everything and then stops reading neither
 /// slows the match to a halt nor changes it: the SDK drops its oldest
 /// queued messages.

@@ -29,7 +29,7 @@ pub use messages::{
     StateRecord, TickActions, OLDEST_READABLE_FORMAT, RECORDING_FORMAT,
 };
 pub use reader::Recording;
-pub use replay::{replay, ReplayOutcome};
+pub use replay::{recorded_start, replay, ReplayOutcome};
 pub use writer::{Recorder, RecorderOptions, RecordingSummary, Sink};
 
 /// Topics, in the order their channels are created.

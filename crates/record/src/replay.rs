@@ -25,18 +25,24 @@ pub enum ReplayOutcome {
     },
 }
 
-/// Re-runs the match from its config, seed and recorded actions (and the
-/// recorded state changes, each applied before the tick it preceded, after
-/// that tick's state was checked) and compares the state after every tick
-/// with the recorded one.
-pub fn replay(rec: &Recording) -> Result<ReplayOutcome, RecordError> {
-    let mut m = match &rec.meta.scenario {
+/// The recorded match as it started: from its configuration and seed, and
+/// from its scenario when it started from one.
+pub fn recorded_start(rec: &Recording) -> Result<Match, RecordError> {
+    Ok(match &rec.meta.scenario {
         None => Match::new(&rec.meta.config, rec.meta.seed)?,
         Some(s) => {
             let scenario = Scenario::from_toml(&s.toml, Some(&s.name))?;
             Match::with_scenario(&rec.meta.config, rec.meta.seed, &scenario, s.own)?
         }
-    };
+    })
+}
+
+/// Re-runs the match from its config, seed and recorded actions (and the
+/// recorded state changes, each applied before the tick it preceded, after
+/// that tick's state was checked) and compares the state after every tick
+/// with the recorded one.
+pub fn replay(rec: &Recording) -> Result<ReplayOutcome, RecordError> {
+    let mut m = recorded_start(rec)?;
     let mut states = rec.states.iter().peekable();
     let check = |m: &Match, recorded: &StateRecord| -> Option<ReplayOutcome> {
         // The hash covers the raw bits of every body and the referee's
