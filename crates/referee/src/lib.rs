@@ -24,7 +24,7 @@ pub use config::{ConfigError, FirstKickOff, MatchConfig, Placement, RewardConfig
 pub use game::{log_compress, Match, MatchError, StateError, MAX_BALL_SPEED};
 pub use observe::blank_observation;
 pub use rules::{Command, Field};
-pub use scenario::{Ending, Judge, Scenario, ScenarioError};
+pub use scenario::{Ending, Judge, RobotStart, Scenario, ScenarioError};
 
 /// The default configuration file, as shipped (`assets/match.toml`).
 pub const DEFAULT_CONFIG_TOML: &str = include_str!("../../../assets/match.toml");

@@ -130,6 +130,8 @@ pub struct RobotSpec {
     pub heading: Heading,
     #[serde(default)]
     pub fallen: bool,
+    #[serde(default)]
+    pub busy: bool,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, Default)]
@@ -224,6 +226,18 @@ pub struct Scenario {
     pub source: String,
 }
 
+/// One present robot of a [`Start`], world coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RobotStart {
+    pub x: f32,
+    pub y: f32,
+    pub heading: f32,
+    /// It starts lying.
+    pub fallen: bool,
+    /// It starts in the recovery of a kick (`busy`).
+    pub busy: bool,
+}
+
 /// A scenario's start in world coordinates: what
 /// [`Match::with_scenario`](crate::Match::with_scenario) applies.
 #[derive(Debug, Clone, PartialEq)]
@@ -232,9 +246,8 @@ pub struct Start {
     pub own: Team,
     pub ball: (f32, f32),
     pub ball_velocity: (f32, f32),
-    /// By robot index: `None` for an absent robot, else (x, y, heading,
-    /// fallen).
-    pub robots: [Option<(f32, f32, f32, bool)>; ROBOTS],
+    /// By robot index: `None` for an absent robot.
+    pub robots: [Option<RobotStart>; ROBOTS],
     pub score: Score,
     /// The tick the match starts at.
     pub tick: Tick,
@@ -397,6 +410,13 @@ impl Scenario {
         let m = cfg.sim.ground_margin / 2.0;
         let robot = "a robot starts within the field lines plus half the ground margin";
         for (k, r) in self.robots.iter().enumerate() {
+            if r.fallen && r.busy {
+                return Err(invalid(
+                    format!("robot[{k}].busy"),
+                    "is true for a fallen robot: a robot lying on the pitch is not in a kick"
+                        .to_string(),
+                ));
+            }
             if r.from == Origin::Centre {
                 inside(&r.x, hx + m, format!("robot[{k}].x"), robot)?;
                 inside(&r.y, hy + m, format!("robot[{k}].y"), robot)?;
@@ -463,12 +483,13 @@ impl Scenario {
                 },
             };
             let i = r.side.team(own).index() * PLAYERS_PER_TEAM + r.player;
-            robots[i] = Some((
-                sign * x,
-                sign * y,
-                crate::rules::wrap_angle(h + turn),
-                r.fallen,
-            ));
+            robots[i] = Some(RobotStart {
+                x: sign * x,
+                y: sign * y,
+                heading: crate::rules::wrap_angle(h + turn),
+                fallen: r.fallen,
+                busy: r.busy,
+            });
         }
         let clock = crate::rules::Clock::new(cfg.minutes, cfg.control_hz, cfg.rules.halves);
         let (first, end) = clock

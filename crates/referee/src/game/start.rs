@@ -47,7 +47,7 @@ impl Match {
         let mut spots = [(0.0, 0.0, 0.0); ROBOTS];
         for (i, robot) in RobotId::all().enumerate() {
             match start.robots[i] {
-                Some((x, y, h, _)) => spots[i] = (x, y, h),
+                Some(r) => spots[i] = (r.x, r.y, r.heading),
                 None => {
                     // Out of play, in its own team's frame as documented.
                     let s = robot.team().direction();
@@ -66,8 +66,8 @@ impl Match {
         }
         self.fall.clear();
         for (i, r) in start.robots.iter().enumerate() {
-            if let Some((x, y, h, true)) = *r {
-                self.sim.lay_down(i, x, y, h);
+            if let Some(r) = r.filter(|r| r.fallen) {
+                self.sim.lay_down(i, r.x, r.y, r.heading);
                 self.fall.lay(i, tick);
             }
         }
@@ -94,6 +94,12 @@ impl Match {
                 });
             }
             self.keep_out(tick);
+        }
+        // Last: the keep-out placement above ends any kick of a robot it moves.
+        for (i, r) in start.robots.iter().enumerate() {
+            if r.is_some_and(|r| r.busy) {
+                self.sim.start_kick_recovery(i);
+            }
         }
         let down = self.fall.down();
         self.controller = self.possession.controller(self.sim.snapshot(), &down);

@@ -296,3 +296,78 @@ fn half_time_ends_a_play_with_a_duration_and_not_one_without() {
     let (e, tick) = play("[state]\nhalf = 2\ntime_left = 1", 20).unwrap();
     assert_eq!((e.kind, e.success, tick), (EndKind::TimeUp, false, 6000));
 }
+
+/// A `busy` robot starts in the recovery of a kick: it observes `busy`,
+/// does not move when told to walk or kick until the recovery is over, the
+/// ball stays where it was, and then it walks. `busy` with `fallen` is
+/// refused, naming the field.
+#[test]
+fn a_busy_robot_starts_in_a_kicks_recovery() {
+    let text = r#"
+name = "busy"
+[ball]
+x = 0.0
+y = 0.0
+[[robot]]
+side = "own"
+player = 1
+x = -0.2
+y = 0.0
+heading = 0.0
+busy = true
+[[robot]]
+side = "own"
+player = 2
+x = -1.0
+y = 1.0
+heading = 0.0
+"#;
+    let s = Scenario::from_toml(text, None).unwrap();
+    let c = cfg();
+    for own in [Team::Blue, Team::Red] {
+        let mut m = Match::with_scenario(&c, 3, &s, own).unwrap();
+        let busy = RobotId::new(own, 1).unwrap();
+        let free = RobotId::new(own, 2).unwrap();
+        assert!(m.observe(own, 1).me().busy);
+        assert!(!m.observe(own, 2).me().busy);
+        let start = m.sim().snapshot().robots[busy.index()].pos;
+        let ball = m.sim().snapshot().ball.pos;
+        let recovery_ticks = (c.sim.kick_recovery * c.control_hz).ceil() as u64;
+        let mut walk = [Action::Stay; ROBOTS];
+        walk[busy.index()] = Action::Shoot;
+        walk[free.index()] = Action::Forward;
+        let mut ticks_busy = 0;
+        while m.observe(own, 1).me().busy {
+            m.step(&walk);
+            ticks_busy += 1;
+            assert!(ticks_busy <= recovery_ticks, "busy for {ticks_busy} ticks");
+        }
+        assert!(ticks_busy >= 1);
+        let now = m.sim().snapshot().robots[busy.index()].pos;
+        assert!(
+            (now[0] - start[0]).hypot(now[1] - start[1]) < 0.01,
+            "{start:?} {now:?}"
+        );
+        let b = m.sim().snapshot().ball.pos;
+        assert!(
+            (b[0] - ball[0]).hypot(b[1] - ball[1]) < 1e-3,
+            "the ball was kicked"
+        );
+        // Free now: it walks.
+        walk[busy.index()] = Action::Forward;
+        for _ in 0..10 {
+            m.step(&walk);
+        }
+        let later = m.sim().snapshot().robots[busy.index()].pos;
+        assert!(
+            (later[0] - now[0]).hypot(later[1] - now[1]) > 0.05,
+            "{now:?} {later:?}"
+        );
+    }
+    let both = text.replace("busy = true", "busy = true\nfallen = true");
+    let err = Scenario::from_toml(&both, None)
+        .and_then(|s| s.check(&c).map(|_| s))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("robot[0].busy"), "{err}");
+}

@@ -1,5 +1,6 @@
 //! Staging a situation that play alone does not reach (a scenario's start):
-//! a robot taken out of play, a robot lying on the pitch, the last touch.
+//! a robot taken out of play, a robot lying on the pitch, a robot busy in
+//! the recovery of a kick, the last touch.
 //! Restarts never call these; they keep bodies apart through the placement
 //! API of `sim.rs`.
 
@@ -46,6 +47,22 @@ impl Sim {
         let rot =
             Rot3::from_rotation_z(heading) * Rot3::from_rotation_y(-std::f32::consts::FRAC_PI_2);
         self.set_robot_pose(robot, [x, y, LYING_HEIGHT], rot.to_array());
+    }
+
+    /// Puts standing robot `robot` into the recovery of a kick it has just
+    /// made: the strike is past (the ball is not kicked), the robot stands
+    /// still and is `kicking` for `kick_recovery` seconds, as after a kick
+    /// of its own. A lying or out-of-play robot is left as it is. Panics if
+    /// `robot >= ROBOTS`.
+    pub fn start_kick_recovery(&mut self, robot: usize) {
+        if !self.in_play(robot) || self.ctrl[robot].fallen {
+            return;
+        }
+        let c = &mut self.ctrl[robot];
+        c.kick_phase = Some(self.windup_steps);
+        c.kick_aim = None;
+        self.strikes[robot] = false;
+        self.refresh_snapshot();
     }
 
     /// Makes `robot` the robot that touched the ball last (`None`: nobody
