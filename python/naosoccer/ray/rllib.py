@@ -18,7 +18,7 @@ from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
 from ray.tune.registry import register_env
 
-from ..env import NaoSoccerParallelEnv
+from ..socket_env import NaoSoccerParallelEnv
 
 #: The name the env is registered under.
 ENV_NAME = "naosoccer"
