@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
-"""Multi-agent PPO with RLlib (new API stack) over the PettingZoo env: one
-policy shared by the four blue robots against the server's scripted team.
+"""Multi-agent PPO with RLlib (new API stack) over the in-process PettingZoo
+env: one policy shared by the four blue robots against the built-in scripted
+team.
 
-Each env runner is a Ray actor with its own private ``naosoccer server``;
-learning runs in this process. Connects to the Ray cluster in
-``$RAY_ADDRESS``, or starts a local one. Prints, per iteration, the env steps
-(control ticks of a match; each is four robot steps) sampled so far, the mean
-team return of the finished matches, and env steps per second of wall-clock
-time (sampling and learning together). Needs the ``ray`` extra
-(``pip install './python[ray]'``; scripts/setup installs it).
+Each env runner is a Ray actor stepping its own match in process
+(``naosoccer.parallel_env``, no server); learning runs in this process.
+Connects to the Ray cluster in ``$RAY_ADDRESS``, or starts a local one.
+Prints, per iteration, the env steps (control ticks of a match; each is four
+robot steps) sampled so far, the mean team return of the finished matches,
+and env steps per second of wall-clock time (sampling and learning
+together). Needs the ``rllib`` extra (``pip install './python[rllib]'``:
+Ray with RLlib, and torch).
 
 The defaults show the plumbing in a few minutes on two cores rather than a
 strong team; raise --iterations for more.
@@ -28,7 +30,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 try:
     import ray
 except ImportError as e:  # pragma: no cover - reported to the user
-    sys.exit(f"this example needs Ray: pip install './python[ray]' ({e})")
+    sys.exit(f"this example needs Ray with RLlib and torch: pip install './python[rllib]' ({e})")
 
 from naosoccer.ray import task_runtime_env  # noqa: E402
 from naosoccer.ray.rllib import ppo_config  # noqa: E402
@@ -36,7 +38,7 @@ from naosoccer.ray.rllib import ppo_config  # noqa: E402
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--env-runners", type=int, default=2, help="env runner actors, each with its own server [default: 2]")
+    p.add_argument("--env-runners", type=int, default=2, help="env runner actors, each stepping its own match [default: 2]")
     p.add_argument("--iterations", type=int, default=5, help="training iterations [default: 5]")
     p.add_argument("--minutes", type=float, default=1.0, help="match length in minutes [default: 1]")
     p.add_argument("--train-batch", type=int, default=4000, help="env steps a training batch [default: 4000]")

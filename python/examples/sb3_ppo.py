@@ -1,17 +1,20 @@
 #!/usr/bin/env python3
 """Trains one Stable-Baselines3 PPO policy shared by the four blue robots
-against the server's scripted team, then reports its score against that team.
+against the built-in scripted team, then reports its score against that team.
 
-The PettingZoo env is turned into an SB3 ``VecEnv`` of four sub-environments,
-one per robot (``TeamVecEnv`` below): SB3 sees four parallel environments
-that advance together, so one network learns from all four robots' steps
+The match is the in-process PettingZoo env (``naosoccer.parallel_env``: no
+server), turned into an SB3 ``VecEnv`` of four sub-environments, one per
+robot (``TeamVecEnv`` below): SB3 sees four parallel environments that
+advance together, so one network learns from all four robots' steps
 (parameter sharing; the observation's one-hot ``me*`` entries tell the robots
-apart). Needs ``stable-baselines3`` (scripts/requirements-dev.txt pins it).
+apart). The robots see the shipped teams' observation layout and choose among
+the paper's five actions (SB3's PPO has no action masks). Needs the ``sb3``
+extra (``pip install './python[sb3]'``: stable-baselines3 and torch).
 
-The default budget is small (a couple of minutes on two cores) and shows the
-plumbing rather than a strong team; raise --timesteps for more.
+The default budget is small (well under a minute of training on two cores)
+and shows the plumbing rather than a strong team; raise --timesteps for more.
 
-    .venv/bin/python python/examples/sb3_ppo.py [--timesteps 20000] [--eval-matches 2]
+    python python/examples/sb3_ppo.py [--timesteps 20000] [--eval-matches 2]
 """
 
 from __future__ import annotations
@@ -26,14 +29,15 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from naosoccer import NaoSoccerParallelEnv  # noqa: E402
+import naosoccer  # noqa: E402
+from naosoccer import ParallelMatchEnv  # noqa: E402
 
 try:
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecEnv
 except ImportError as e:  # pragma: no cover - reported to the user
-    sys.exit(f"this example needs stable-baselines3 (pip install stable-baselines3): {e}")
+    sys.exit(f"this example needs the sb3 extra (pip install './python[sb3]'): {e}")
 
 
 class TeamVecEnv(VecEnv):
@@ -45,7 +49,7 @@ class TeamVecEnv(VecEnv):
     the returned observation is the first of a fresh match (the next seed).
     """
 
-    def __init__(self, env: NaoSoccerParallelEnv, seed: int = 0) -> None:
+    def __init__(self, env: ParallelMatchEnv, seed: int = 0) -> None:
         self.env = env
         self.agents = list(env.possible_agents)
         self._seed = seed
@@ -71,11 +75,12 @@ class TeamVecEnv(VecEnv):
         done = all(term[a] or trunc[a] for a in self.agents)
         out_infos: List[dict] = []
         for a in self.agents:
-            info = {"score": infos[a]["score"]}
+            info = {}
             if done:
                 info["terminal_observation"] = obs[a]
                 info["TimeLimit.truncated"] = bool(trunc[a])
-                info["match_end"] = infos[a]["match_end"]
+                info["score"] = infos[a]["score"]
+                info["stats"] = infos[a]["stats"]
             out_infos.append(info)
         stacked = self.reset() if done else self._stack(obs)
         return stacked, rewards, np.full(self.num_envs, done), out_infos
@@ -105,8 +110,9 @@ class TeamVecEnv(VecEnv):
         return list(indices)
 
 
-def evaluate(model: Optional[PPO], env: NaoSoccerParallelEnv, matches: int, seed: int) -> List[dict]:
-    """Plays ``matches`` whole matches; ``model=None`` plays uniformly random actions."""
+def evaluate(model: Optional[PPO], env: ParallelMatchEnv, matches: int, seed: int) -> List[dict]:
+    """Plays ``matches`` whole matches; ``model=None`` plays uniformly random
+    actions. Returns each match's final infos (score and statistics)."""
     rng = np.random.default_rng(seed)
     ends = []
     for m in range(matches):
@@ -114,11 +120,11 @@ def evaluate(model: Optional[PPO], env: NaoSoccerParallelEnv, matches: int, seed
         while env.agents:
             batch = np.stack([obs[a] for a in env.agents])
             if model is None:
-                acts = rng.integers(0, 5, size=len(env.agents))
+                acts = rng.integers(0, env.num_actions, size=len(env.agents))
             else:
                 acts, _ = model.predict(batch, deterministic=True)
             obs, _, _, _, infos = env.step({a: int(acts[i]) for i, a in enumerate(env.agents)})
-        ends.append(infos[env.possible_agents[0]]["match_end"])
+        ends.append(infos[env.possible_agents[0]])
     return ends
 
 
@@ -145,7 +151,9 @@ def main() -> int:
     args = ap.parse_args()
 
     torch.set_num_threads(1)
-    train_env = NaoSoccerParallelEnv(minutes=args.train_minutes, opponent="scripted")
+    # The paper's five actions, never masked (decision=None): SB3's PPO
+    # would not read the masks of the shipped teams' seven.
+    train_env = naosoccer.parallel_env(minutes=args.train_minutes, opponent="scripted", decision=None)
     venv = TeamVecEnv(train_env, seed=args.seed)
     model = PPO(
         "MlpPolicy",
@@ -169,7 +177,7 @@ def main() -> int:
         print(f"saved the model to {args.save}")
     venv.close()
 
-    eval_env = NaoSoccerParallelEnv(minutes=args.eval_minutes, opponent="scripted")
+    eval_env = naosoccer.parallel_env(minutes=args.eval_minutes, opponent="scripted", decision=None)
     try:
         eval_seed = 10_000 + args.seed  # matches the policy never trained on
         summarise("PPO", evaluate(model, eval_env, args.eval_matches, eval_seed))

@@ -3,8 +3,9 @@ repository root (the examples name assets/ paths) with this tree's package.
 
 The block that connects to "a running server" gets one: a private server's
 address and tokens in the environment variables it reads. The blocks that
-use the vector env need the native extension (scripts/wheel --in-place, as
-scripts/test does); without it they are skipped and say so. The shell lines
+use the in-process envs (``VectorEnv``, ``parallel_env``, ``env``) need the
+native extension (scripts/wheel --in-place, as scripts/test does); without it
+they are skipped and say so. The shell lines
 of the guide run elsewhere: the install in test_wheel.py (the wheel
 scripts/wheel builds), the benchmarks in test_examples.py.
 """
@@ -38,6 +39,8 @@ def python_blocks(doc: Path):
 
 
 BLOCKS = python_blocks(DOC)
+#: What a block names when it steps matches in process (the native extension).
+IN_PROCESS = ("VectorEnv", "parallel_env(", "naosoccer.env(")
 
 
 def test_the_guide_has_its_examples():
@@ -49,7 +52,7 @@ def test_the_guide_has_its_examples():
 
 @pytest.mark.parametrize("line,code", BLOCKS, ids=[f"PYTHON.md:{n}" for n, _ in BLOCKS])
 def test_every_python_snippet_of_python_md_runs(binary, line, code):
-    if "VectorEnv" in code and importlib.util.find_spec("naosoccer._native") is None:
+    if any(name in code for name in IN_PROCESS) and importlib.util.find_spec("naosoccer._native") is None:
         pytest.skip("the native extension is not built (scripts/wheel --in-place)")
     env = {**os.environ, "PYTHONPATH": str(REPO / "python"), "NAOSOCCER_BIN": binary}
     with LocalServer(binary) as srv:

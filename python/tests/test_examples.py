@@ -29,6 +29,7 @@ def test_random_agent(binary):
 
 def test_sb3_ppo(binary):
     pytest.importorskip("stable_baselines3")
+    pytest.importorskip("naosoccer._native", reason="the native extension is not built (scripts/wheel --in-place)")
     text = run(
         binary,
         "examples/sb3_ppo.py",

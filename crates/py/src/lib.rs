@@ -1,8 +1,12 @@
 //! `naosoccer._native`: the Python extension module. It moves numpy arrays
 //! in and out of [`vector::VecMatches`] and releases the GIL while the
 //! matches step; the Gymnasium conventions (spaces, infos, auto-reset
-//! bookkeeping) are in `python/naosoccer/vector.py`.
+//! bookkeeping) are in `python/naosoccer/vector.py`, the PettingZoo ones
+//! (one match, agents, episodes that end) in `python/naosoccer/parallel.py`.
+//! Frames for `render()` are drawn by `naosoccer render`'s own code
+//! (crates/render).
 
+pub mod state;
 pub mod vector;
 
 use std::sync::Mutex;
@@ -14,6 +18,7 @@ use pyo3::types::{PyDict, PyList};
 
 use naosoccer_policy::export::{write_ppo_team, Layer};
 use naosoccer_policy::DecisionConfig;
+use naosoccer_record::StateRecord;
 use naosoccer_referee::{MatchConfig, Scenario};
 use vector::{Controlled, EnvSpec, Finished, StepOut, VecEnvError, VecMatches};
 
@@ -30,9 +35,10 @@ impl From<VecEnvError> for PyErr {
 /// N matches stepped in process, one control tick a step.
 ///
 /// `VecMatches(num_matches, team, opponent, obs_version, decision_json,
-/// config_toml, minutes, threads, scenario_toml)`; see `naosoccer.VectorEnv`,
-/// which wraps it. `opponent` `None`: the scenario's `opponent`, else
-/// `scripted`.
+/// config_toml, minutes, threads, scenario_toml, restart=True)`; see
+/// `naosoccer.VectorEnv` and `naosoccer.parallel_env`, which wrap it.
+/// `opponent` `None`: the scenario's `opponent`, else `scripted`.
+/// `restart=False`: a finished match stays until the next `reset`.
 #[pyclass(module = "naosoccer._native", name = "VecMatches")]
 struct VecMatchesPy {
     // Locked only by the thread that holds the Python object's borrow; the
@@ -40,12 +46,13 @@ struct VecMatchesPy {
     inner: Mutex<VecMatches>,
     shape: (usize, usize, usize, usize),
     opponent: String,
+    control_hz: f32,
 }
 
 #[pymethods]
 impl VecMatchesPy {
     #[new]
-    #[pyo3(signature = (num_matches, team, opponent, obs_version, decision_json=None, config_toml=None, minutes=None, threads=1, scenario_toml=None))]
+    #[pyo3(signature = (num_matches, team, opponent, obs_version, decision_json=None, config_toml=None, minutes=None, threads=1, scenario_toml=None, restart=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         num_matches: usize,
@@ -57,6 +64,7 @@ impl VecMatchesPy {
         minutes: Option<f32>,
         threads: usize,
         scenario_toml: Option<&str>,
+        restart: bool,
     ) -> PyResult<Self> {
         let mut config = match config_toml {
             Some(t) => MatchConfig::from_toml_str(t).map_err(value_error)?,
@@ -82,6 +90,7 @@ impl VecMatchesPy {
             (None, Some(s)) => s.opponent.clone(),
             (None, None) => "scripted".to_owned(),
         };
+        let control_hz = config.control_hz;
         let env = VecMatches::new(EnvSpec {
             matches: num_matches,
             controlled: Controlled::parse(team)?,
@@ -91,6 +100,7 @@ impl VecMatchesPy {
             decision,
             threads,
             scenario,
+            restart,
         })?;
         let shape = (
             env.num_matches(),
@@ -102,6 +112,7 @@ impl VecMatchesPy {
             inner: Mutex::new(env),
             shape,
             opponent,
+            control_hz,
         })
     }
 
@@ -116,6 +127,41 @@ impl VecMatchesPy {
     #[getter]
     fn shape(&self) -> (usize, usize, usize, usize) {
         self.shape
+    }
+
+    /// Control ticks a second of game time (one `step` is one tick).
+    #[getter]
+    fn control_hz(&self) -> f32 {
+        self.control_hz
+    }
+
+    /// Each slot's global state: float32 `(matches, STATE_DIM)`, entries
+    /// named by `STATE_NAMES` (world frame, both teams).
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let mut out = Vec::new();
+        lock(&self.inner).write_states(&mut out);
+        let n = out.len() / state::STATE_DIM;
+        Ok(PyArray1::from_vec(py, out)
+            .reshape([n, state::STATE_DIM])?
+            .into_any())
+    }
+
+    /// Slot `slot`'s current match drawn as `naosoccer render --gif` draws
+    /// each frame: uint8 `(height, width, 3)`, `width` pixels wide (120 to
+    /// 4000), the height following the pitch.
+    fn render<'py>(&self, py: Python<'py>, slot: usize, width: u32) -> PyResult<Bound<'py, PyAny>> {
+        let (state, sim) = {
+            let env = lock(&self.inner);
+            let m = env
+                .current(slot)
+                .ok_or_else(|| value_error(format!("no match in slot {slot}: reset first")))?;
+            (StateRecord::of(m), m.config().sim.clone())
+        };
+        let frame = py.detach(|| naosoccer_render::draw_frame(&sim, &state, width));
+        let (h, w) = (frame.height as usize, frame.width as usize);
+        Ok(PyArray1::from_vec(py, frame.pixels)
+            .reshape([h, w, 3])?
+            .into_any())
     }
 
     /// Starts every slot's first match (slot `i`: seed `seed + i`); returns
@@ -258,6 +304,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<VecMatchesPy>()?;
     m.add("OBS_VERSION", naosoccer_policy::OBS_VERSION)?;
     m.add("OBS_VERSION_LATEST", naosoccer_policy::OBS_VERSION_LATEST)?;
+    m.add("STATE_NAMES", state::state_names())?;
     m.add(
         "ACTION_NAMES",
         naosoccer_policy::actions::ACTION_NAMES.to_vec(),

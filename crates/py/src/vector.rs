@@ -17,7 +17,9 @@
 //! the slot's next match: slot `i`'s `e`-th match (counting from the last
 //! [`VecMatches::reset`] with seed `s`) has seed `s + i + e * n` for `n`
 //! slots, so a slot's first match after `reset(s)` is `naosoccer match
-//! --seed s+i`.
+//! --seed s+i`. Without [`EnvSpec::restart`] (the PettingZoo env: one
+//! match, an episode that ends) a finished match stays as it ended, to be
+//! looked at and drawn, and stepping refuses until the next reset.
 
 use naosoccer_eval::eval::Side;
 use naosoccer_policy::actions::{action_count, banned_actions, to_action, SupportSpot};
@@ -46,6 +48,8 @@ pub enum VecEnvError {
         value: i64,
         actions: usize,
     },
+    #[error("the match of slot {slot} has ended: reset before stepping again")]
+    Ended { slot: usize },
 }
 
 /// Which robots the caller drives.
@@ -98,6 +102,9 @@ pub struct EnvSpec {
     pub threads: usize,
     /// Every match starts from this scenario (checked against `config`).
     pub scenario: Option<Scenario>,
+    /// Whether a finished match is replaced by the slot's next one in the
+    /// same step (the vector env) or stays finished until the next reset.
+    pub restart: bool,
 }
 
 /// How a scenario's play ended: its end condition's name, whether that is
@@ -148,6 +155,8 @@ struct Slot {
     /// tick's events it reads.
     judge: Option<Judge>,
     events: Vec<Event>,
+    /// Finished and, without restarts, kept until the next reset.
+    ended: bool,
 }
 
 /// The per-slot constants a worker thread needs.
@@ -163,6 +172,7 @@ struct Shape<'a> {
     seed: u64,
     /// The scenario and the colour of its own team.
     scenario: Option<&'a (Scenario, Team)>,
+    restart: bool,
 }
 
 /// The [`Shape`] of `$env`, borrowing only the fields that stepping reads
@@ -180,6 +190,7 @@ macro_rules! shape {
             slots: $env.matches,
             seed: $env.seed,
             scenario: $env.scenario.as_ref(),
+            restart: $env.restart,
         }
     };
 }
@@ -198,6 +209,7 @@ pub struct VecMatches {
     /// Action indices per row, kept to hand a trained opponent its share.
     opp_actions: Vec<usize>,
     scenario: Option<(Scenario, Team)>,
+    restart: bool,
 }
 
 impl VecMatches {
@@ -245,6 +257,7 @@ impl VecMatches {
             slots: Vec::new(),
             opp_actions: Vec::new(),
             scenario,
+            restart: spec.restart,
         })
     }
 
@@ -302,6 +315,9 @@ impl VecMatches {
     pub fn step(&mut self, actions: &[i64]) -> Result<StepOut, VecEnvError> {
         if self.slots.len() != self.matches {
             return Err(VecEnvError::Config("step before reset".into()));
+        }
+        if let Some(slot) = self.slots.iter().position(|s| s.ended) {
+            return Err(VecEnvError::Ended { slot });
         }
         let rows = self.robots.len();
         let n_actions = self.actions();
@@ -427,6 +443,24 @@ impl VecMatches {
     pub fn scores(&self) -> Vec<Score> {
         self.slots.iter().map(|s| s.m.score()).collect()
     }
+
+    /// Slot `slot`'s current match (as it ended, without restarts), `None`
+    /// before the first reset or for a slot out of range.
+    pub fn current(&self, slot: usize) -> Option<&Match> {
+        self.slots.get(slot).map(|s| &s.m)
+    }
+
+    /// Appends each slot's global state ([`crate::state`], `STATE_DIM`
+    /// values a slot) to `out`.
+    pub fn write_states(&self, out: &mut Vec<f32>) {
+        let player_0 = |t| RobotId::new(t, 0).expect("player 0 exists").index();
+        let (b, r) = (player_0(Team::Blue), player_0(Team::Red));
+        for slot in &self.slots {
+            let at = out.len();
+            out.resize(at + crate::state::STATE_DIM, 0.0);
+            crate::state::write_state(&self.scale, &slot.obs[b], &slot.obs[r], &mut out[at..]);
+        }
+    }
 }
 
 fn controlled_of(robots: &[RobotId]) -> Controlled {
@@ -478,6 +512,7 @@ fn new_slot(shape: &Shape, index: usize, episode: u64) -> Result<Slot, VecEnvErr
         episode,
         judge,
         events: Vec::new(),
+        ended: false,
     };
     observe_all(&mut slot);
     Ok(slot)
@@ -565,6 +600,10 @@ fn step_chunk(
                     ticks: e.ticks,
                 }),
             });
+            if !shape.restart {
+                slot.ended = true;
+                continue;
+            }
             *slot = new_slot(shape, index, slot.episode + 1)?;
         }
         write_rows(shape, slot, i, obs, masks);
@@ -590,6 +629,7 @@ mod tests {
             decision: None,
             threads: 2,
             scenario: None,
+            restart: true,
         }
     }
 
@@ -632,6 +672,39 @@ mod tests {
             m.step(&actions);
         }
         m.state_hash()
+    }
+
+    /// Without restarts a finished match stays as it ended (the PettingZoo
+    /// env draws and inspects it) and stepping is refused until a reset.
+    #[test]
+    fn without_restarts_a_finished_match_stays() {
+        let mut s = spec(1, "scripted", 0.1);
+        s.restart = false;
+        let mut env = VecMatches::new(s).unwrap();
+        env.reset(40).unwrap();
+        let stay = vec![4i64; 4];
+        let finished = loop {
+            let out = env.step(&stay).unwrap();
+            if !out.finished.is_empty() {
+                assert_eq!(out.terminated, [true]);
+                break out.finished;
+            }
+        };
+        assert_eq!(finished[0].seed, 40);
+        let m = env.current(0).unwrap();
+        assert!(m.is_finished());
+        assert_eq!(m.state_hash(), finished[0].state_hash);
+        assert_eq!(env.seeds(), vec![40]);
+        assert!(matches!(
+            env.step(&stay),
+            Err(VecEnvError::Ended { slot: 0 })
+        ));
+        env.reset(41).unwrap();
+        assert_eq!(env.ticks(), vec![0]);
+        env.step(&stay).unwrap();
+        let mut state = Vec::new();
+        env.write_states(&mut state);
+        assert_eq!(state.len(), crate::state::STATE_DIM);
     }
 
     #[test]

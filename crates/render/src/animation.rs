@@ -1,5 +1,6 @@
 //! `naosoccer render FILE --gif OUT.gif`: a recording as an animated top
-//! view, with the score and the clock.
+//! view, with the score and the clock; and one frame of it, drawn from one
+//! state ([`draw_frame`], the Python env's `render()`).
 //!
 //! Frames are drawn straight in a fixed palette (no colour quantisation, so
 //! the same recording and options give the same bytes), and every frame after
@@ -13,6 +14,7 @@ use std::path::Path;
 use anyhow::{bail, Context};
 use naosoccer_proto::{Tick, ROBOTS};
 use naosoccer_record::{Recording, StateRecord};
+use naosoccer_sim::SimConfig;
 
 /// What `render --gif` was asked for.
 #[derive(Debug, Clone, Copy)]
@@ -188,8 +190,7 @@ impl View {
     }
 }
 
-fn background(rec: &Recording, width: u32) -> (View, Canvas) {
-    let sim = &rec.meta.config.sim;
+fn background(sim: &SimConfig, width: u32) -> (View, Canvas) {
     let (hl, hw) = (sim.field_length as f64 / 2.0, sim.field_width as f64 / 2.0);
     let margin = sim.ground_margin.max(sim.goal_depth) as f64;
     let (x0, x1) = (-hl - margin, hl + margin);
@@ -279,6 +280,33 @@ fn draw_state(c: &mut Canvas, view: &View, s: &StateRecord) {
     c.text(c.w - 2 * f - cw, f, f, &clock, WHITE);
 }
 
+/// The narrowest and widest pictures drawn, in pixels.
+pub const MIN_WIDTH: u32 = 120;
+pub const MAX_WIDTH: u32 = 4000;
+
+/// One picture of the top view: 8-bit RGB, `width` × `height` pixels, rows
+/// top to bottom, three bytes a pixel.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RgbFrame {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<u8>,
+}
+
+/// Draws `state` as `render --gif` draws each of its frames: the pitch of
+/// `sim`, the robots (the ball's controller ringed), the ball, the score and
+/// the clock. `width` is clamped to [`MIN_WIDTH`]..=[`MAX_WIDTH`]; the
+/// height follows the pitch, plus the banner.
+pub fn draw_frame(sim: &SimConfig, state: &StateRecord, width: u32) -> RgbFrame {
+    let (view, mut c) = background(sim, width.clamp(MIN_WIDTH, MAX_WIDTH));
+    draw_state(&mut c, &view, state);
+    RgbFrame {
+        width: c.w as u32,
+        height: c.h as u32,
+        pixels: c.px.iter().flat_map(|&i| PALETTE[i as usize]).collect(),
+    }
+}
+
 /// Writes `rec` as an animated GIF at `out`.
 pub fn write_gif(rec: &Recording, out: &Path, opts: GifOptions) -> anyhow::Result<GifSummary> {
     if !(1..=50).contains(&opts.fps) {
@@ -305,8 +333,8 @@ pub fn write_gif(rec: &Recording, out: &Path, opts: GifOptions) -> anyhow::Resul
             last_tick.get() as f64 / hz
         );
     }
-    let width = opts.width.clamp(120, 4000);
-    let (view, bg) = background(rec, width);
+    let width = opts.width.clamp(MIN_WIDTH, MAX_WIDTH);
+    let (view, bg) = background(&rec.meta.config.sim, width);
     let (w, h) = (bg.w as u16, bg.h as u16);
 
     let palette: Vec<u8> = PALETTE.iter().flatten().copied().collect();
@@ -402,5 +430,66 @@ fn delta_frame(prev: &Canvas, next: &Canvas, delay: u16) -> gif::Frame<'static> 
         dispose: gif::DisposalMethod::Keep,
         buffer: buf.into(),
         ..gif::Frame::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use naosoccer_referee::{Match, MatchConfig};
+
+    /// The mean pixel column and row of `colour` in `f`, and how many.
+    fn centroid(f: &RgbFrame, colour: [u8; 3]) -> (f64, f64, usize) {
+        let (mut x, mut y, mut n) = (0.0, 0.0, 0);
+        for (i, px) in f.pixels.chunks_exact(3).enumerate() {
+            if px == colour {
+                x += (i % f.width as usize) as f64;
+                y += (i / f.width as usize) as f64;
+                n += 1;
+            }
+        }
+        (x / n.max(1) as f64, y / n.max(1) as f64, n)
+    }
+
+    #[test]
+    fn a_frame_is_the_gif_drawing_of_one_state() {
+        let cfg = MatchConfig::default();
+        let m = Match::new(&cfg, 3).unwrap();
+        let mut state = StateRecord::of(&m);
+        let a = draw_frame(&cfg.sim, &state, 640);
+        assert_eq!(a.width, 640);
+        assert_eq!(a.pixels.len(), (a.width * a.height * 3) as usize);
+        // Every pixel is a colour of the palette, and every robot is drawn.
+        assert!(a
+            .pixels
+            .chunks_exact(3)
+            .all(|px| PALETTE.iter().any(|p| p == px)));
+        for colour in [BLUE, BLUE + 3, RED, RED + 3] {
+            assert!(centroid(&a, PALETTE[colour as usize]).2 > 0, "{colour}");
+        }
+        // The ball one metre further +x (blue's attack) is drawn ppm pixels
+        // to the right; one metre further +y, ppm pixels higher up.
+        let sim = &cfg.sim;
+        let margin = sim.ground_margin.max(sim.goal_depth);
+        let ppm = 640.0 / f64::from(sim.field_length + 2.0 * margin);
+        let ball = PALETTE[BALL as usize];
+        let (ax, ay, an) = centroid(&a, ball);
+        state.ball.x += 1.0;
+        let b = draw_frame(&cfg.sim, &state, 640);
+        assert_eq!((a.width, a.height), (b.width, b.height));
+        let (bx, by, bn) = centroid(&b, ball);
+        state.ball.y += 1.0;
+        let (cx, cy, _) = centroid(&draw_frame(&cfg.sim, &state, 640), ball);
+        assert!(an > 0 && bn > 0);
+        assert!(
+            (bx - ax - ppm).abs() < 1.0 && (by - ay).abs() < 1.0,
+            "{ax} -> {bx}"
+        );
+        assert!(
+            (ay - cy - ppm).abs() < 1.0 && (cx - bx).abs() < 1.0,
+            "{ay} -> {cy}"
+        );
+        // Widths out of range are clamped.
+        assert_eq!(draw_frame(&cfg.sim, &state, 10).width, MIN_WIDTH);
     }
 }

@@ -1,5 +1,6 @@
 //! The top view drawn from a recording's states, as one PNG and as an
-//! animated GIF (`naosoccer render`).
+//! animated GIF (`naosoccer render`), and one state drawn as one RGB frame
+//! (the Python env's `render()`).
 //!
 //! Its own crate so that the drawing loops are compiled optimised while the
 //! `naosoccer` binary's own code, which only parses arguments and
@@ -13,7 +14,9 @@ use naosoccer_record::Recording;
 
 mod animation;
 
-pub use animation::{write_gif, GifOptions, GifSummary};
+pub use animation::{
+    draw_frame, write_gif, GifOptions, GifSummary, RgbFrame, MAX_WIDTH, MIN_WIDTH,
+};
 
 /// What `render_png` drew.
 #[derive(Debug, Clone, Copy)]

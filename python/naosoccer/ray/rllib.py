@@ -1,11 +1,11 @@
 """The PettingZoo env for RLlib (new API stack): multi-agent PPO with one
 policy shared by the team's four robots.
 
-Every env runner builds its own :class:`naosoccer.NaoSoccerParallelEnv`, and
-so starts its own private ``naosoccer server`` on its node (binary as
-:func:`naosoccer.find_binary` finds it there: ``$NAOSOCCER_BIN``, then the
-repository's ``target/release``). python/examples/rllib_ppo.py trains with
-it; docs/RAY.md has its figures.
+Every env runner builds its own in-process match
+(:func:`naosoccer.parallel_env`, the package's native extension, which the
+runtime environment ships with the package: no server, no binary on the
+nodes). python/examples/rllib_ppo.py trains with it; docs/RAY.md has its
+figures.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
 from ray.tune.registry import register_env
 
-from ..env import NaoSoccerParallelEnv
+from ..parallel import ParallelMatchEnv
 
 #: The name the env is registered under.
 ENV_NAME = "naosoccer"
@@ -40,20 +40,22 @@ class NaoSoccerRllibEnv(ParallelPettingZooEnv):
 
 
 def make_env(config: Dict[str, Any]) -> NaoSoccerRllibEnv:
-    """One team of a match as an RLlib ``MultiAgentEnv``, with a private
-    server. ``config`` (RLlib's ``env_config``, an ``EnvContext``): ``team``,
-    ``opponent``, ``minutes``, ``seed`` and ``binary``, as
-    :class:`~naosoccer.NaoSoccerParallelEnv` takes them. Env runner ``k``
-    plays match seeds ``(seed + k) * SEED_STRIDE`` onward, as it does when
-    RLlib seeds it (``config.debugging(seed=seed)``)."""
+    """One team of an in-process match as an RLlib ``MultiAgentEnv``.
+    ``config`` (RLlib's ``env_config``, an ``EnvContext``): ``team``,
+    ``opponent``, ``minutes``, ``seed``, ``obs_version`` and ``decision``, as
+    :func:`naosoccer.parallel_env` takes them (``decision`` default ``None``:
+    the paper's five actions, as RLlib's default module reads no masks).
+    Env runner ``k`` plays match seeds ``(seed + k) * SEED_STRIDE`` onward,
+    as it does when RLlib seeds it (``config.debugging(seed=seed)``)."""
     seed: Optional[int] = config.get("seed")
     worker = getattr(config, "worker_index", 0)
-    env = NaoSoccerParallelEnv(
+    env = ParallelMatchEnv(
         team=config.get("team", "blue"),
         opponent=config.get("opponent", "scripted"),
         minutes=config.get("minutes"),
         seed=None if seed is None else (seed + worker) * SEED_STRIDE,
-        binary=config.get("binary"),
+        obs_version=config.get("obs_version"),
+        decision=config.get("decision"),
     )
     return NaoSoccerRllibEnv(env)
 
@@ -68,13 +70,12 @@ def ppo_config(
     minibatch: int = 500,
     epochs: int = 4,
     lr: float = 3e-4,
-    binary: Optional[str] = None,
 ) -> PPOConfig:
     """Multi-agent PPO over :func:`make_env`: the four robots share the
     policy ``"team"``; learning happens in the driver (no learner actors),
     sampling in ``env_runners`` env runner actors (0: in the driver)."""
     register_env(ENV_NAME, make_env)
-    env_config = {"opponent": opponent, "minutes": minutes, "seed": seed, "binary": binary}
+    env_config = {"opponent": opponent, "minutes": minutes, "seed": seed}
     return (
         PPOConfig()
         .environment(ENV_NAME, env_config=env_config)

@@ -1,5 +1,8 @@
 """``NaoSoccerParallelEnv``: one team of a naosoccer match as a PettingZoo
 ``ParallelEnv``, each robot an agent, over the socket protocol (lockstep).
+
+For agents in other processes or on other machines; one match stepped in
+this process, with no server, is :func:`naosoccer.parallel_env`.
 """
 
 from __future__ import annotations
