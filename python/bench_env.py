@@ -5,7 +5,8 @@ With ``--vector``: ``naosoccer.VectorEnv``, matches stepped in this process
 by the native extension, one team's four robots driven from Python with
 uniformly random actions against the opponent, every match auto-resetting;
 it prints match ticks per second (one tick of one match; a ``step`` is one
-tick of every match).
+tick of every match), per second of CPU time, and how a step's time splits
+between the native call and the Python around it.
 
     .venv/bin/python python/bench_env.py --vector [--num-matches 8] [--seconds 20]
 
@@ -65,6 +66,25 @@ def bench_client(server: LocalServer, seed: int, minutes: float) -> tuple:
         return steps, time.perf_counter() - start
 
 
+class _TimedNative:
+    """The env's native object with its ``step`` timed: what the Rust side
+    (the matches stepped, the arrays built) costs, apart from the Python of
+    ``VectorEnv.step`` around it."""
+
+    def __init__(self, native) -> None:
+        self.native = native
+        self.seconds = 0.0
+
+    def step(self, actions):
+        start = time.perf_counter()
+        out = self.native.step(actions)
+        self.seconds += time.perf_counter() - start
+        return out
+
+    def __getattr__(self, name):
+        return getattr(self.native, name)
+
+
 def bench_vector(args: argparse.Namespace) -> int:
     from naosoccer import VectorEnv
 
@@ -72,22 +92,31 @@ def bench_vector(args: argparse.Namespace) -> int:
                     threads=args.threads)
     env.reset()
     rng = np.random.default_rng(args.seed)
-    # Warm-up: the first ticks pay for page faults and thread start-up.
+    # Warm-up: the first ticks pay for page faults.
     for _ in range(20):
         env.step(rng.integers(0, env.num_actions, size=(env.num_envs, env.robots)))
+    native = env._native = _TimedNative(env._native)
     steps = 0
     ended = 0
-    start = time.perf_counter()
+    acting = 0.0
+    stepping = 0.0
+    clock = time.perf_counter
+    start = clock()
     cpu_start = time.process_time()
-    while time.perf_counter() - start < args.seconds:
-        _, _, term, _, _ = env.step(rng.integers(0, env.num_actions, size=(env.num_envs, env.robots)))
+    while clock() - start < args.seconds:
+        t0 = clock()
+        actions = rng.integers(0, env.num_actions, size=(env.num_envs, env.robots))
+        t1 = clock()
+        _, _, term, _, _ = env.step(actions)
+        stepping += clock() - t1
+        acting += t1 - t0
         ended += int(term.sum())
         steps += 1
-    secs = time.perf_counter() - start
+    secs = clock() - start
     cpu = time.process_time() - cpu_start
     ticks = steps * env.num_envs
     print(f"VectorEnv: {env.num_envs} matches, {env.robots} robots from Python (random actions) "
-          f"vs {args.opponent}, threads {args.threads or 'auto'}, {os.cpu_count()} CPUs")
+          f"vs {args.opponent}, {env.threads} threads, {os.cpu_count()} CPUs")
     print(f"{steps} steps, {ticks} match ticks in {secs:.2f} s = {ticks / secs:,.0f} match ticks/s "
           f"({steps / secs:,.0f} steps/s; {ended} matches ended)")
     # On a machine other work shares, wall-clock speed says more about the
@@ -96,6 +125,16 @@ def bench_vector(args: argparse.Namespace) -> int:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"{cpu:.2f} s of CPU = {ticks / cpu:,.0f} match ticks per CPU-second; "
           f"load average {load:.1f} on {os.cpu_count()} CPUs")
+    # Where a step's wall time goes: the random actions (numpy), the Python
+    # of VectorEnv.step, and its native call (the matches stepped on the
+    # env's threads, the output arrays built; with threads, waiting for the
+    # last match too); what is left is this loop.
+    per = 1e6 / steps
+    wrapper = stepping - native.seconds
+    rest = secs - acting - stepping
+    print(f"per step (us): native step {native.seconds * per:.1f}, VectorEnv.step's Python {wrapper * per:.1f}, "
+          f"random actions {acting * per:.1f}, loop {rest * per:.1f}; "
+          f"native {100 * native.seconds / secs:.1f}% of the time")
     target = 10_000
     print(f"target >= {target:,} match ticks/s: {'met' if ticks / secs >= target else 'NOT met'}")
     return 0

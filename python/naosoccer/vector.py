@@ -152,6 +152,8 @@ class VectorEnv(_GymVectorEnv):
         )
         #: The opponents' policy spec as resolved (``None`` with ``team="both"``).
         self.opponent = None if team == "both" else self._native.opponent
+        #: Threads stepping the matches, this one included (at most ``num_matches``).
+        self.threads = self._native.threads
         n, robots, dim, actions = self._native.shape
         self.num_envs = n
         self.robots = robots
@@ -202,6 +204,13 @@ class VectorEnv(_GymVectorEnv):
             infos = self._add_info(infos, {"final_obs": final_obs, "final_info": f}, i)
         truncated = np.zeros(self.num_envs, dtype=bool)
         return obs, rewards, terminated, truncated, infos
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Stops the stepping threads and frees the matches (``close()``, or
+        the env's garbage collection, calls it); the env is unusable after."""
+        native = getattr(self, "_native", None)  # None: the constructor failed
+        if native is not None:
+            native.close()
 
     def seeds(self) -> List[int]:
         """Each slot's current match seed."""

@@ -1,8 +1,11 @@
 """The in-process vector env (``naosoccer.VectorEnv``, the native extension):
 spaces and shapes, the same matches as ``naosoccer match`` (state hash for
-state hash), auto-reset in the same step, action masks, opponents."""
+state hash), auto-reset in the same step, action masks, opponents, the same
+matches whatever the number of threads, and threads that end with the env."""
 
+import gc
 import json
+import os
 import subprocess
 
 import numpy as np
@@ -105,6 +108,73 @@ def test_same_seed_same_steps():
         runs.append(trace)
     for a, b in zip(*runs):
         np.testing.assert_array_equal(a, b)
+
+
+def run_trace(threads, steps):
+    """Everything ``steps`` steps of random actions return, and the state
+    hashes after each."""
+    env = VectorEnv(3, opponent="scripted", minutes=0.2, seed=13, threads=threads, like=TEAM)
+    assert env.threads == threads
+    obs, infos = env.reset()
+    trace = [obs, infos["action_mask"]]
+    rng = np.random.default_rng(5)
+    for _ in range(steps):
+        obs, rewards, term, _, infos = env.step(rng.integers(0, env.num_actions, size=(3, 4)))
+        trace += [obs, rewards, term, infos["action_mask"], env.state_hashes()]
+        if term.any():
+            trace += [infos["final_obs"][term].tolist(), infos["final_info"]["state_hash"][term].tolist(),
+                      infos["final_info"]["seed"][term].tolist()]
+    env.close()
+    return trace
+
+
+def test_threads_do_not_change_the_matches():
+    # 300 steps of 0.2-minute matches: every slot restarts twice. One
+    # thread or several, the same arrays and the same state hashes.
+    one = run_trace(1, 300)
+    assert sum(isinstance(t, np.ndarray) and t.dtype == bool and t.ndim == 1 and t.any() for t in one) == 2
+    for threads in (2, 3):
+        other = run_trace(threads, 300)
+        assert len(other) == len(one)
+        for k, (a, b) in enumerate(zip(one, other)):
+            np.testing.assert_array_equal(a, b, err_msg=f"threads {threads}, entry {k}")
+
+
+def stepping_threads():
+    """The env threads alive in this process (Linux names them
+    ``naosoccer-step-N``, cut to 15 characters)."""
+    names = []
+    for tid in os.listdir("/proc/self/task"):
+        try:
+            with open(f"/proc/self/task/{tid}/comm") as f:
+                names.append(f.read().strip())
+        except FileNotFoundError:  # a thread that ended meanwhile
+            pass
+    return sum(n.startswith("naosoccer-step") for n in names)
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="counts threads through Linux's /proc")
+def test_threads_end_with_the_env():
+    gc.collect()  # envs other tests dropped in reference cycles: gone now, not during the test
+    before = stepping_threads()
+    env = VectorEnv(4, opponent="idle", minutes=0.1, seed=1, threads=3)
+    assert stepping_threads() == before, "the threads start with the first reset"
+    env.reset()
+    env.step(np.full((4, 4), STAY))
+    assert stepping_threads() == before + 2, "the caller's thread steps too"
+    env.close()
+    assert stepping_threads() == before
+    with pytest.raises(RuntimeError, match="closed"):
+        env.step(np.full((4, 4), STAY))
+    env.close()  # a second close does nothing
+    # An env that is dropped without close() stops its threads too.
+    env = VectorEnv(4, opponent="idle", minutes=0.1, seed=1, threads=2)
+    env.reset()
+    assert stepping_threads() == before + 1
+    del env
+    gc.collect()
+    assert stepping_threads() == before
+    assert VectorEnv(2, opponent="idle", threads=8).threads == 2
 
 
 def test_masks_follow_a_shipped_teams_actions():

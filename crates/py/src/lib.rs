@@ -6,13 +6,14 @@
 //! Frames for `render()` are drawn by `naosoccer render`'s own code
 //! (crates/render).
 
+pub mod pool;
 pub mod state;
 pub mod vector;
 
-use std::sync::Mutex;
+use std::sync::{Mutex, MutexGuard};
 
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -28,7 +29,13 @@ fn value_error(e: impl std::fmt::Display) -> PyErr {
 
 impl From<VecEnvError> for PyErr {
     fn from(e: VecEnvError) -> PyErr {
-        value_error(e)
+        match e {
+            // Not the caller's mistake: a bug, or the machine.
+            VecEnvError::Panicked(_) | VecEnvError::Thread(_) => {
+                PyRuntimeError::new_err(e.to_string())
+            }
+            e => value_error(e),
+        }
     }
 }
 
@@ -39,11 +46,13 @@ impl From<VecEnvError> for PyErr {
 /// `naosoccer.VectorEnv` and `naosoccer.parallel_env`, which wrap it.
 /// `opponent` `None`: the scenario's `opponent`, else `scripted`.
 /// `restart=False`: a finished match stays until the next `reset`.
+/// `close()` stops the stepping threads and frees the matches.
 #[pyclass(module = "naosoccer._native", name = "VecMatches")]
 struct VecMatchesPy {
     // Locked only by the thread that holds the Python object's borrow; the
-    // mutex makes the class shareable between Python threads.
-    inner: Mutex<VecMatches>,
+    // mutex makes the class shareable between Python threads. `None` once
+    // closed.
+    inner: Mutex<Option<VecMatches>>,
     shape: (usize, usize, usize, usize),
     opponent: String,
     control_hz: f32,
@@ -109,7 +118,7 @@ impl VecMatchesPy {
             env.actions(),
         );
         Ok(VecMatchesPy {
-            inner: Mutex::new(env),
+            inner: Mutex::new(Some(env)),
             shape,
             opponent,
             control_hz,
@@ -135,11 +144,26 @@ impl VecMatchesPy {
         self.control_hz
     }
 
+    /// Threads stepping the matches, the caller's included.
+    #[getter]
+    fn threads(&self) -> PyResult<usize> {
+        Ok(open(&mut lock(&self.inner))?.threads())
+    }
+
+    /// Stops the stepping threads (waiting for them) and frees the matches;
+    /// every later call but `close` raises `RuntimeError`.
+    fn close(&self, py: Python<'_>) {
+        let inner = &self.inner;
+        // Dropped outside the lock; the workers need no GIL to stop.
+        let env = lock(inner).take();
+        py.detach(move || drop(env));
+    }
+
     /// Each slot's global state: float32 `(matches, STATE_DIM)`, entries
     /// named by `STATE_NAMES` (world frame, both teams).
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let mut out = Vec::new();
-        lock(&self.inner).write_states(&mut out);
+        open(&mut lock(&self.inner))?.write_states(&mut out);
         let n = out.len() / state::STATE_DIM;
         Ok(PyArray1::from_vec(py, out)
             .reshape([n, state::STATE_DIM])?
@@ -150,13 +174,9 @@ impl VecMatchesPy {
     /// each frame: uint8 `(height, width, 3)`, `width` pixels wide (120 to
     /// 4000), the height following the pitch.
     fn render<'py>(&self, py: Python<'py>, slot: usize, width: u32) -> PyResult<Bound<'py, PyAny>> {
-        let (state, sim) = {
-            let env = lock(&self.inner);
-            let m = env
-                .current(slot)
-                .ok_or_else(|| value_error(format!("no match in slot {slot}: reset first")))?;
-            (StateRecord::of(m), m.config().sim.clone())
-        };
+        let (state, sim) = open(&mut lock(&self.inner))?
+            .with_match(slot, |m| (StateRecord::of(m), m.config().sim.clone()))
+            .ok_or_else(|| value_error(format!("no match in slot {slot}: reset first")))?;
         let frame = py.detach(|| naosoccer_render::draw_frame(&sim, &state, width));
         let (h, w) = (frame.height as usize, frame.width as usize);
         Ok(PyArray1::from_vec(py, frame.pixels)
@@ -168,7 +188,8 @@ impl VecMatchesPy {
     /// `(obs, masks)`.
     fn reset<'py>(&self, py: Python<'py>, seed: u64) -> PyResult<Bound<'py, PyAny>> {
         let inner = &self.inner;
-        let out = py.detach(|| lock(inner).reset(seed))?;
+        let out =
+            py.detach(|| -> PyResult<StepOut> { Ok(open(&mut lock(inner))?.reset(seed)?) })?;
         let (n, r, d, a) = self.shape;
         let obs = PyArray1::from_vec(py, out.obs).reshape([n, r, d])?;
         let masks = PyArray1::from_vec(py, out.masks).reshape([n, r, a])?;
@@ -187,7 +208,8 @@ impl VecMatchesPy {
         let acts = actions.as_slice().map_err(value_error)?.to_vec();
         drop(actions);
         let inner = &self.inner;
-        let out: StepOut = py.detach(|| lock(inner).step(&acts))?;
+        let out =
+            py.detach(|| -> PyResult<StepOut> { Ok(open(&mut lock(inner))?.step(&acts)?) })?;
         let (n, r, d, a) = self.shape;
         let obs = PyArray1::from_vec(py, out.obs).reshape([n, r, d])?;
         let rewards = PyArray1::from_vec(py, out.rewards).reshape([n, r])?;
@@ -203,27 +225,27 @@ impl VecMatchesPy {
     }
 
     /// Each slot's current match seed.
-    fn seeds(&self) -> Vec<u64> {
-        lock(&self.inner).seeds()
+    fn seeds(&self) -> PyResult<Vec<u64>> {
+        Ok(open(&mut lock(&self.inner))?.seeds())
     }
 
     /// Each slot's current tick.
-    fn ticks(&self) -> Vec<u64> {
-        lock(&self.inner).ticks()
+    fn ticks(&self) -> PyResult<Vec<u64>> {
+        Ok(open(&mut lock(&self.inner))?.ticks())
     }
 
     /// Each slot's current score as (blue, red).
-    fn scores(&self) -> Vec<(u32, u32)> {
-        lock(&self.inner)
+    fn scores(&self) -> PyResult<Vec<(u32, u32)>> {
+        Ok(open(&mut lock(&self.inner))?
             .scores()
             .into_iter()
             .map(|s| (s.blue, s.red))
-            .collect()
+            .collect())
     }
 
     /// Each slot's current state hash.
-    fn state_hashes(&self) -> Vec<u64> {
-        lock(&self.inner).state_hashes()
+    fn state_hashes(&self) -> PyResult<Vec<u64>> {
+        Ok(open(&mut lock(&self.inner))?.state_hashes())
     }
 
     /// Writes a PPO actor that reads this env's observations and chooses
@@ -249,16 +271,25 @@ impl VecMatchesPy {
                 bias: b.as_array().iter().copied().collect(),
             });
         }
-        let env = lock(&self.inner);
+        let mut env = lock(&self.inner);
+        let env = open(&mut env)?;
         write_ppo_team(std::path::Path::new(dir), &out, env.scale(), env.decision())
             .map_err(value_error)
     }
 }
 
-fn lock(m: &Mutex<VecMatches>) -> std::sync::MutexGuard<'_, VecMatches> {
-    // A panic while stepping poisons the lock; the matches are then in an
-    // unknown state, and the next call says so by panicking too.
-    m.lock().expect("a previous step panicked")
+fn lock(m: &Mutex<Option<VecMatches>>) -> MutexGuard<'_, Option<VecMatches>> {
+    // A panic while stepping is caught where it happens (the env returns
+    // `VecEnvError::Panicked`); one anywhere else poisons the lock, the
+    // matches are then in an unknown state, and the next call says so by
+    // panicking too.
+    m.lock().expect("a previous call panicked")
+}
+
+/// The env, unless it was closed.
+fn open<'a>(env: &'a mut MutexGuard<'_, Option<VecMatches>>) -> PyResult<&'a mut VecMatches> {
+    env.as_mut()
+        .ok_or_else(|| PyRuntimeError::new_err("the env is closed"))
 }
 
 fn finished_dict<'py>(

@@ -20,15 +20,23 @@
 //! --seed s+i`. Without [`EnvSpec::restart`] (the PettingZoo env: one
 //! match, an episode that ends) a finished match stays as it ended, to be
 //! looked at and drawn, and stepping refuses until the next reset.
+//!
+//! The slots are stepped by a [`Pool`] of threads started at the first
+//! reset and stopped when the env is dropped: every slot is stepped on its
+//! own, so the matches come out the same whatever the number of threads.
+
+use std::sync::{Arc, MutexGuard};
 
 use naosoccer_eval::eval::Side;
 use naosoccer_policy::actions::{action_count, banned_actions, to_action, SupportSpot};
-use naosoccer_policy::Policy;
 use naosoccer_policy::{DecisionConfig, NetAction, ObsScale, PolicyError, OBS_DIM};
+use naosoccer_policy::{Policy, PolicyKind};
 use naosoccer_proto::{
     Action, Event, MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_referee::{blank_observation, Judge, Match, MatchConfig, MatchError, Scenario};
+
+use crate::pool::Pool;
 
 /// Why an env cannot be built or stepped.
 #[derive(Debug, thiserror::Error)]
@@ -50,6 +58,12 @@ pub enum VecEnvError {
     },
     #[error("the match of slot {slot} has ended: reset before stepping again")]
     Ended { slot: usize },
+    #[error("cannot start a stepping thread: {0}")]
+    Thread(#[source] std::io::Error),
+    /// A match panicked while stepping (a bug): the matches are left as
+    /// they were, and stepping is refused until the next reset.
+    #[error("a match panicked while stepping: {0}; reset before stepping again")]
+    Panicked(String),
 }
 
 /// Which robots the caller drives.
@@ -98,7 +112,8 @@ pub struct EnvSpec {
     pub obs_version: u32,
     /// The action set and masks; `None`: the paper's five, none masked.
     pub decision: Option<DecisionConfig>,
-    /// Worker threads for stepping (at least 1).
+    /// Threads stepping the matches, the caller's included (at least 1;
+    /// no more than the matches are used).
     pub threads: usize,
     /// Every match starts from this scenario (checked against `config`).
     pub scenario: Option<Scenario>,
@@ -142,7 +157,37 @@ pub struct StepOut {
     pub finished: Vec<Finished>,
 }
 
+/// What every slot's matches are played under, fixed for the env's life
+/// and shared with the stepping threads.
+struct Setup {
+    matches: usize,
+    cfg: MatchConfig,
+    robots: Vec<RobotId>,
+    scale: ObsScale,
+    decision: Option<DecisionConfig>,
+    /// The built-in policy of the robots the caller does not drive (`None`:
+    /// a trained team, which the env's own thread runs for all slots).
+    builtin: Option<PolicyKind>,
+    /// The scenario and the colour of its own team.
+    scenario: Option<(Scenario, Team)>,
+    restart: bool,
+}
+
+impl Setup {
+    fn actions(&self) -> usize {
+        action_count(self.decision)
+    }
+
+    fn dim(&self) -> usize {
+        self.scale.dim()
+    }
+}
+
 struct Slot {
+    /// The slot's index and the seed of the last reset: with `episode`,
+    /// the current match's seed.
+    index: usize,
+    reset_seed: u64,
     m: Match,
     obs: Vec<Observation>,
     /// Built-in opponents, one per robot (`None`: driven by the caller or
@@ -157,59 +202,49 @@ struct Slot {
     events: Vec<Event>,
     /// Finished and, without restarts, kept until the next reset.
     ended: bool,
+    /// What the last reset or step wrote for this slot, kept from match to
+    /// match so that stepping allocates nothing.
+    out: SlotOut,
 }
 
-/// The per-slot constants a worker thread needs.
-struct Shape<'a> {
-    cfg: &'a MatchConfig,
-    robots: &'a [RobotId],
-    scale: ObsScale,
-    decision: Option<DecisionConfig>,
-    actions: usize,
-    dim: usize,
-    opponent: &'a Side,
-    slots: usize,
-    seed: u64,
-    /// The scenario and the colour of its own team.
-    scenario: Option<&'a (Scenario, Team)>,
-    restart: bool,
+/// One slot's share of a [`StepOut`], and what went wrong stepping it.
+#[derive(Default)]
+struct SlotOut {
+    obs: Vec<f32>,
+    rewards: Vec<f32>,
+    masks: Vec<bool>,
+    terminated: bool,
+    finished: Option<Finished>,
+    error: Option<VecEnvError>,
 }
 
-/// The [`Shape`] of `$env`, borrowing only the fields that stepping reads
-/// (a method would borrow the slots too).
-macro_rules! shape {
-    ($env:expr) => {
-        Shape {
-            cfg: &$env.cfg,
-            robots: &$env.robots,
-            scale: $env.scale,
-            decision: $env.decision,
-            actions: action_count($env.decision),
-            dim: $env.scale.dim(),
-            opponent: &$env.opponent,
-            slots: $env.matches,
-            seed: $env.seed,
-            scenario: $env.scenario.as_ref(),
-            restart: $env.restart,
+impl SlotOut {
+    fn new(setup: &Setup) -> SlotOut {
+        let rows = setup.robots.len();
+        SlotOut {
+            obs: vec![0.0; rows * setup.dim()],
+            rewards: vec![0.0; rows],
+            masks: vec![true; rows * setup.actions()],
+            terminated: false,
+            finished: None,
+            error: None,
         }
-    };
+    }
 }
 
 /// N matches stepped together.
 pub struct VecMatches {
-    matches: usize,
-    cfg: MatchConfig,
-    robots: Vec<RobotId>,
-    scale: ObsScale,
-    decision: Option<DecisionConfig>,
+    setup: Arc<Setup>,
+    /// The opponent as parsed; a trained team decides here, on the caller's
+    /// thread, for all slots at once.
     opponent: Side,
     threads: usize,
-    seed: u64,
-    slots: Vec<Slot>,
+    /// The slots and the threads that step them, from the first reset on.
+    pool: Option<Pool<Slot>>,
+    /// A panic's message while stepping, until the next reset.
+    panicked: Option<String>,
     /// Action indices per row, kept to hand a trained opponent its share.
     opp_actions: Vec<usize>,
-    scenario: Option<(Scenario, Team)>,
-    restart: bool,
 }
 
 impl VecMatches {
@@ -231,7 +266,7 @@ impl VecMatches {
         }
         scale.version = spec.obs_version;
         let opponent = match spec.controlled {
-            Controlled::Both => Side::Builtin(naosoccer_policy::PolicyKind::Idle),
+            Controlled::Both => Side::Builtin(PolicyKind::Idle),
             Controlled::Team(_) => Side::parse(&spec.opponent)?,
         };
         let scenario = match spec.scenario {
@@ -245,66 +280,97 @@ impl VecMatches {
             }
             None => None,
         };
+        let builtin = match &opponent {
+            Side::Builtin(k) => Some(*k),
+            Side::Learned(_) => None,
+        };
         Ok(VecMatches {
-            matches: spec.matches,
-            robots: spec.controlled.robots(),
-            cfg: spec.config,
-            scale,
-            decision: spec.decision,
+            setup: Arc::new(Setup {
+                matches: spec.matches,
+                robots: spec.controlled.robots(),
+                cfg: spec.config,
+                scale,
+                decision: spec.decision,
+                builtin,
+                scenario,
+                restart: spec.restart,
+            }),
             opponent,
             threads: spec.threads.max(1),
-            seed: 0,
-            slots: Vec::new(),
+            pool: None,
+            panicked: None,
             opp_actions: Vec::new(),
-            scenario,
-            restart: spec.restart,
         })
     }
 
     pub fn num_matches(&self) -> usize {
-        self.matches
+        self.setup.matches
     }
 
     /// Controlled robots per match.
     pub fn robots(&self) -> usize {
-        self.robots.len()
+        self.setup.robots.len()
     }
 
     /// Actions per robot.
     pub fn actions(&self) -> usize {
-        action_count(self.decision)
+        self.setup.actions()
     }
 
     /// Length of an observation row.
     pub fn obs_dim(&self) -> usize {
-        self.scale.dim()
+        self.setup.dim()
     }
 
     pub fn scale(&self) -> ObsScale {
-        self.scale
+        self.setup.scale
     }
 
     /// The action set and masks the robots decide under (`None`: the
     /// paper's five, never masked).
     pub fn decision(&self) -> Option<DecisionConfig> {
-        self.decision
+        self.setup.decision
+    }
+
+    /// Threads stepping the matches, the caller's included (the workers
+    /// start at the first reset; never more than the matches).
+    pub fn threads(&self) -> usize {
+        self.threads.min(self.setup.matches)
     }
 
     /// Starts every slot's first match, slot `i` with seed `seed + i`, and
-    /// writes their first observations and masks.
+    /// writes their first observations and masks. A reset that fails
+    /// changes nothing.
     pub fn reset(&mut self, seed: u64) -> Result<StepOut, VecEnvError> {
-        self.seed = seed;
-        self.slots.clear();
-        let shape = shape!(self);
-        let slots = (0..shape.slots)
-            .map(|i| new_slot(&shape, i, 0))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut out = StepOut::default();
-        out.resize(&shape);
-        for (i, slot) in slots.iter().enumerate() {
-            write_rows(&shape, slot, i, &mut out.obs, &mut out.masks);
+        let setup = &self.setup;
+        let slots = (0..setup.matches)
+            .map(|i| {
+                let mut slot = new_slot(setup, i, seed, 0)?;
+                slot.out = SlotOut::new(setup);
+                write_rows(setup, &slot.obs, &mut slot.out);
+                Ok(slot)
+            })
+            .collect::<Result<Vec<_>, VecEnvError>>()?;
+        match &self.pool {
+            Some(pool) => {
+                for (i, slot) in slots.into_iter().enumerate() {
+                    *pool.lock(i) = slot;
+                }
+            }
+            None => {
+                let setup = Arc::clone(setup);
+                let pool = Pool::new(slots, self.threads, move |slot: &mut Slot| {
+                    slot.out.error = step_slot(&setup, slot).err();
+                })
+                .map_err(VecEnvError::Thread)?;
+                self.pool = Some(pool);
+            }
         }
-        self.slots = slots;
+        self.panicked = None;
+        let mut out = StepOut::new(&self.setup);
+        for (i, slot) in self.slots().enumerate() {
+            out.copy_rows(i, &slot.out);
+        }
         Ok(out)
     }
 
@@ -313,17 +379,21 @@ impl VecMatches {
     /// in `finished` and restarted; `obs` and `masks` are then the new
     /// match's.
     pub fn step(&mut self, actions: &[i64]) -> Result<StepOut, VecEnvError> {
-        if self.slots.len() != self.matches {
+        let Some(pool) = &mut self.pool else {
             return Err(VecEnvError::Config("step before reset".into()));
+        };
+        if let Some(message) = &self.panicked {
+            return Err(VecEnvError::Panicked(message.clone()));
         }
-        if let Some(slot) = self.slots.iter().position(|s| s.ended) {
+        let setup = &*self.setup;
+        if let Some(slot) = (0..pool.len()).find(|&i| pool.lock(i).ended) {
             return Err(VecEnvError::Ended { slot });
         }
-        let rows = self.robots.len();
-        let n_actions = self.actions();
-        if actions.len() != self.matches * rows {
+        let rows = setup.robots.len();
+        let n_actions = setup.actions();
+        if actions.len() != setup.matches * rows {
             return Err(VecEnvError::ActionCount {
-                expected: self.matches * rows,
+                expected: setup.matches * rows,
                 got: actions.len(),
             });
         }
@@ -338,30 +408,33 @@ impl VecMatches {
                 actions: n_actions,
             });
         }
-        let half = [self.scale.half_length, self.scale.half_width];
-        let spot = self
+        let half = [setup.scale.half_length, setup.scale.half_width];
+        let spot = setup
             .decision
             .map_or(SupportSpot::default(), |d| d.support_spot);
-        for (slot, acts) in self.slots.iter_mut().zip(actions.chunks_exact(rows)) {
-            for (r, &a) in self.robots.iter().zip(acts) {
+        for (i, acts) in actions.chunks_exact(rows).enumerate() {
+            let mut slot = pool.lock(i);
+            let slot = &mut *slot;
+            for (r, &a) in setup.robots.iter().zip(acts) {
                 let a = NetAction::from_index(a as usize).expect("actions are checked above");
                 slot.actions[r.index()] = to_action(a, &slot.obs[r.index()], half, spot);
             }
         }
         // A trained opponent decides for all matches in one forward pass.
         if let (Side::Learned(policy), Controlled::Team(own)) =
-            (&mut self.opponent, controlled_of(&self.robots))
+            (&mut self.opponent, controlled_of(&setup.robots))
         {
             let team = own.other();
             let base = team.index() * PLAYERS_PER_TEAM;
-            let teams: Vec<(u64, &[Observation])> = self
-                .slots
+            let mut slots: Vec<MutexGuard<Slot>> = (0..pool.len()).map(|i| pool.lock(i)).collect();
+            let teams: Vec<(u64, &[Observation])> = slots
                 .iter()
                 .map(|s| (s.m.seed(), &s.obs[base..base + PLAYERS_PER_TEAM]))
                 .collect();
             self.opp_actions.resize(teams.len() * PLAYERS_PER_TEAM, 0);
             policy.act_matches(&teams, &mut self.opp_actions);
-            for (i, slot) in self.slots.iter_mut().enumerate() {
+            drop(teams);
+            for (i, slot) in slots.iter_mut().enumerate() {
                 for p in 0..PLAYERS_PER_TEAM {
                     let a = policy.action(
                         self.opp_actions[i * PLAYERS_PER_TEAM + p],
@@ -371,83 +444,59 @@ impl VecMatches {
                 }
             }
         }
-        let shape = shape!(self);
-        let mut out = StepOut::default();
-        out.resize(&shape);
-        let threads = self.threads.clamp(1, shape.slots);
-        let per = shape.slots.div_ceil(threads);
-        let (dim, acts) = (shape.dim, shape.actions);
-        let results: Vec<Result<Vec<Finished>, VecEnvError>> = if threads == 1 {
-            vec![step_chunk(
-                &shape,
-                0,
-                &mut self.slots,
-                &mut out.obs,
-                &mut out.rewards,
-                &mut out.terminated,
-                &mut out.masks,
-            )]
-        } else {
-            std::thread::scope(|s| {
-                let shape = &shape;
-                let mut chunks = self
-                    .slots
-                    .chunks_mut(per)
-                    .zip(out.obs.chunks_mut(per * rows * dim))
-                    .zip(out.rewards.chunks_mut(per * rows))
-                    .zip(out.terminated.chunks_mut(per))
-                    .zip(out.masks.chunks_mut(per * rows * acts))
-                    .enumerate();
-                // This thread steps the first chunk itself: one spawn fewer
-                // per step, and it would only wait otherwise.
-                let (_, ((((slots, obs), rewards), term), masks)) =
-                    chunks.next().expect("at least one slot");
-                let handles: Vec<_> = chunks
-                    .map(|(k, ((((slots, obs), rewards), term), masks))| {
-                        s.spawn(move || {
-                            step_chunk(shape, k * per, slots, obs, rewards, term, masks)
-                        })
-                    })
-                    .collect();
-                let mut results = vec![step_chunk(shape, 0, slots, obs, rewards, term, masks)];
-                results.extend(
-                    handles
-                        .into_iter()
-                        .map(|h| h.join().expect("a stepping thread panicked")),
-                );
-                results
-            })
-        };
-        for r in results {
-            out.finished.extend(r?);
+        if let Err(message) = pool.run() {
+            self.panicked = Some(message.clone());
+            return Err(VecEnvError::Panicked(message));
         }
-        Ok(out)
+        let mut out = StepOut::new(setup);
+        let mut error = None;
+        for i in 0..pool.len() {
+            let mut slot = pool.lock(i);
+            out.copy_rows(i, &slot.out);
+            out.terminated[i] = slot.out.terminated;
+            out.finished.extend(slot.out.finished.take());
+            if let Some(e) = slot.out.error.take() {
+                error.get_or_insert(e);
+            }
+        }
+        match error {
+            Some(e) => Err(e),
+            None => Ok(out),
+        }
+    }
+
+    /// The slots, in order, each locked in turn (none before the first
+    /// reset).
+    fn slots(&self) -> impl Iterator<Item = MutexGuard<'_, Slot>> + '_ {
+        let pool = self.pool.as_ref();
+        (0..pool.map_or(0, |p| p.len())).filter_map(move |i| pool.map(|p| p.lock(i)))
     }
 
     /// The state hash of each slot's current match.
     pub fn state_hashes(&self) -> Vec<u64> {
-        self.slots.iter().map(|s| s.m.state_hash()).collect()
+        self.slots().map(|s| s.m.state_hash()).collect()
     }
 
     /// Each slot's current match seed.
     pub fn seeds(&self) -> Vec<u64> {
-        self.slots.iter().map(|s| s.m.seed()).collect()
+        self.slots().map(|s| s.m.seed()).collect()
     }
 
     /// Each slot's current tick.
     pub fn ticks(&self) -> Vec<u64> {
-        self.slots.iter().map(|s| s.m.tick().get()).collect()
+        self.slots().map(|s| s.m.tick().get()).collect()
     }
 
     /// Each slot's current score, as (blue, red).
     pub fn scores(&self) -> Vec<Score> {
-        self.slots.iter().map(|s| s.m.score()).collect()
+        self.slots().map(|s| s.m.score()).collect()
     }
 
-    /// Slot `slot`'s current match (as it ended, without restarts), `None`
-    /// before the first reset or for a slot out of range.
-    pub fn current(&self, slot: usize) -> Option<&Match> {
-        self.slots.get(slot).map(|s| &s.m)
+    /// `f` of slot `slot`'s current match (as it ended, without restarts),
+    /// `None` before the first reset or for a slot out of range.
+    pub fn with_match<R>(&self, slot: usize, f: impl FnOnce(&Match) -> R) -> Option<R> {
+        let pool = self.pool.as_ref()?;
+        (slot < pool.len()).then(|| f(&pool.lock(slot).m))
     }
 
     /// Appends each slot's global state ([`crate::state`], `STATE_DIM`
@@ -455,10 +504,11 @@ impl VecMatches {
     pub fn write_states(&self, out: &mut Vec<f32>) {
         let player_0 = |t| RobotId::new(t, 0).expect("player 0 exists").index();
         let (b, r) = (player_0(Team::Blue), player_0(Team::Red));
-        for slot in &self.slots {
+        for slot in self.slots() {
             let at = out.len();
             out.resize(at + crate::state::STATE_DIM, 0.0);
-            crate::state::write_state(&self.scale, &slot.obs[b], &slot.obs[r], &mut out[at..]);
+            let scale = &self.setup.scale;
+            crate::state::write_state(scale, &slot.obs[b], &slot.obs[r], &mut out[at..]);
         }
     }
 }
@@ -472,39 +522,58 @@ fn controlled_of(robots: &[RobotId]) -> Controlled {
 }
 
 impl StepOut {
-    fn resize(&mut self, s: &Shape) {
-        let rows = s.slots * s.robots.len();
-        self.obs.resize(rows * s.dim, 0.0);
-        self.rewards.resize(rows, 0.0);
-        self.terminated.resize(s.slots, false);
-        self.masks.resize(rows * s.actions, true);
+    fn new(s: &Setup) -> StepOut {
+        let rows = s.matches * s.robots.len();
+        StepOut {
+            obs: vec![0.0; rows * s.dim()],
+            rewards: vec![0.0; rows],
+            terminated: vec![false; s.matches],
+            masks: vec![true; rows * s.actions()],
+            finished: Vec::new(),
+        }
+    }
+
+    /// Copies slot `i`'s rows of observations, rewards and masks.
+    fn copy_rows(&mut self, i: usize, slot: &SlotOut) {
+        let at = |len: usize| i * len..(i + 1) * len;
+        self.obs[at(slot.obs.len())].copy_from_slice(&slot.obs);
+        self.rewards[at(slot.rewards.len())].copy_from_slice(&slot.rewards);
+        self.masks[at(slot.masks.len())].copy_from_slice(&slot.masks);
     }
 }
 
-fn match_seed(shape: &Shape, slot: usize, episode: u64) -> u64 {
-    shape
-        .seed
+fn match_seed(setup: &Setup, slot: usize, reset_seed: u64, episode: u64) -> u64 {
+    reset_seed
         .wrapping_add(slot as u64)
-        .wrapping_add(episode.wrapping_mul(shape.slots as u64))
+        .wrapping_add(episode.wrapping_mul(setup.matches as u64))
 }
 
-fn new_slot(shape: &Shape, index: usize, episode: u64) -> Result<Slot, VecEnvError> {
-    let seed = match_seed(shape, index, episode);
-    let (m, judge) = match shape.scenario {
+/// Slot `index`'s `episode`-th match after a reset with `reset_seed`, with
+/// no buffers for its rows yet.
+fn new_slot(
+    setup: &Setup,
+    index: usize,
+    reset_seed: u64,
+    episode: u64,
+) -> Result<Slot, VecEnvError> {
+    let seed = match_seed(setup, index, reset_seed, episode);
+    let (m, judge) = match &setup.scenario {
         Some((s, own)) => {
-            let m = Match::with_scenario(shape.cfg, seed, s, *own)?;
-            let judge = s.judge(shape.cfg, *own, m.tick());
+            let m = Match::with_scenario(&setup.cfg, seed, s, *own)?;
+            let judge = s.judge(&setup.cfg, *own, m.tick());
             (m, Some(judge))
         }
-        None => (Match::new(shape.cfg, seed)?, None),
+        None => (Match::new(&setup.cfg, seed)?, None),
     };
     let policies = RobotId::all()
-        .map(|r| match shape.opponent {
-            Side::Builtin(k) if !shape.robots.contains(&r) => Some(k.build(seed, r)),
+        .map(|r| match setup.builtin {
+            Some(k) if !setup.robots.contains(&r) => Some(k.build(seed, r)),
             _ => None,
         })
         .collect();
     let mut slot = Slot {
+        index,
+        reset_seed,
         m,
         obs: (0..ROBOTS).map(|_| blank_observation()).collect(),
         policies,
@@ -513,6 +582,7 @@ fn new_slot(shape: &Shape, index: usize, episode: u64) -> Result<Slot, VecEnvErr
         judge,
         events: Vec::new(),
         ended: false,
+        out: SlotOut::default(),
     };
     observe_all(&mut slot);
     Ok(slot)
@@ -525,20 +595,20 @@ fn observe_all(slot: &mut Slot) {
     }
 }
 
-/// Writes slot `index`'s rows of observations and masks (`obs` and `masks`
-/// are the whole chunk's buffers, `index` counts within the chunk).
-fn write_rows(shape: &Shape, slot: &Slot, index: usize, obs: &mut [f32], masks: &mut [bool]) {
-    let rows = shape.robots.len();
+/// Writes a slot's rows of observations and masks from its robots'
+/// observations.
+fn write_rows(setup: &Setup, obs: &[Observation], out: &mut SlotOut) {
+    let dim = setup.dim();
+    let actions = setup.actions();
     let mut row = [0.0f32; OBS_DIM];
-    for (k, r) in shape.robots.iter().enumerate() {
-        let o = &slot.obs[r.index()];
-        let at = index * rows + k;
-        shape.scale.encode(o, &mut row);
-        obs[at * shape.dim..(at + 1) * shape.dim].copy_from_slice(&row[..shape.dim]);
-        let mask = &mut masks[at * shape.actions..(at + 1) * shape.actions];
+    for (k, r) in setup.robots.iter().enumerate() {
+        let o = &obs[r.index()];
+        setup.scale.encode(o, &mut row);
+        out.obs[k * dim..(k + 1) * dim].copy_from_slice(&row[..dim]);
+        let mask = &mut out.masks[k * actions..(k + 1) * actions];
         mask.fill(true);
-        if let Some(d) = &shape.decision {
-            let in_reach = shape.scale.kick.in_reach(o);
+        if let Some(d) = &setup.decision {
+            let in_reach = setup.scale.kick.in_reach(o);
             let mut bans = banned_actions(o, in_reach, d);
             if d.mask_shoot && !in_reach {
                 bans |= NetAction::Shoot.bit();
@@ -550,65 +620,59 @@ fn write_rows(shape: &Shape, slot: &Slot, index: usize, obs: &mut [f32], masks: 
     }
 }
 
-fn step_chunk(
-    shape: &Shape,
-    first: usize,
-    slots: &mut [Slot],
-    obs: &mut [f32],
-    rewards: &mut [f32],
-    terminated: &mut [bool],
-    masks: &mut [bool],
-) -> Result<Vec<Finished>, VecEnvError> {
-    let rows = shape.robots.len();
-    let mut finished = Vec::new();
-    for (i, slot) in slots.iter_mut().enumerate() {
-        for (k, p) in slot.policies.iter_mut().enumerate() {
-            if let Some(p) = p {
-                slot.actions[k] = p.act(&slot.obs[k]);
-            }
+/// One control tick of one slot's match, on whichever thread takes it:
+/// the built-in robots decide, the match steps, and the slot's rows, its
+/// ending and, if it ended, its next match are written into the slot.
+fn step_slot(setup: &Setup, slot: &mut Slot) -> Result<(), VecEnvError> {
+    slot.out.terminated = false;
+    slot.out.finished = None;
+    for (k, p) in slot.policies.iter_mut().enumerate() {
+        if let Some(p) = p {
+            slot.actions[k] = p.act(&slot.obs[k]);
         }
-        let ending = match &slot.judge {
-            Some(judge) => {
-                slot.events.clear();
-                slot.events.extend_from_slice(slot.m.step(&slot.actions));
-                judge.check(&slot.m, &slot.events)
-            }
-            None => {
-                slot.m.step(&slot.actions);
-                None
-            }
-        };
-        for (k, r) in shape.robots.iter().enumerate() {
-            rewards[i * rows + k] = slot.m.reward(r.team(), r.player());
-        }
-        observe_all(slot);
-        if slot.m.is_finished() || ending.is_some() {
-            terminated[i] = true;
-            write_rows(shape, slot, i, obs, masks);
-            let index = first + i;
-            finished.push(Finished {
-                slot: index,
-                seed: slot.m.seed(),
-                ticks: slot.m.tick().get(),
-                score: slot.m.score(),
-                stats: slot.m.stats(),
-                state_hash: slot.m.state_hash(),
-                obs: obs[i * rows * shape.dim..(i + 1) * rows * shape.dim].to_vec(),
-                scenario: ending.map(|e| ScenarioEnding {
-                    ending: e.kind.name(),
-                    success: e.success,
-                    ticks: e.ticks,
-                }),
-            });
-            if !shape.restart {
-                slot.ended = true;
-                continue;
-            }
-            *slot = new_slot(shape, index, slot.episode + 1)?;
-        }
-        write_rows(shape, slot, i, obs, masks);
     }
-    Ok(finished)
+    let ending = match &slot.judge {
+        Some(judge) => {
+            slot.events.clear();
+            slot.events.extend_from_slice(slot.m.step(&slot.actions));
+            judge.check(&slot.m, &slot.events)
+        }
+        None => {
+            slot.m.step(&slot.actions);
+            None
+        }
+    };
+    for (k, r) in setup.robots.iter().enumerate() {
+        slot.out.rewards[k] = slot.m.reward(r.team(), r.player());
+    }
+    observe_all(slot);
+    write_rows(setup, &slot.obs, &mut slot.out);
+    if slot.m.is_finished() || ending.is_some() {
+        slot.out.terminated = true;
+        slot.out.finished = Some(Finished {
+            slot: slot.index,
+            seed: slot.m.seed(),
+            ticks: slot.m.tick().get(),
+            score: slot.m.score(),
+            stats: slot.m.stats(),
+            state_hash: slot.m.state_hash(),
+            obs: slot.out.obs.clone(),
+            scenario: ending.map(|e| ScenarioEnding {
+                ending: e.kind.name(),
+                success: e.success,
+                ticks: e.ticks,
+            }),
+        });
+        if !setup.restart {
+            slot.ended = true;
+            return Ok(());
+        }
+        let mut next = new_slot(setup, slot.index, slot.reset_seed, slot.episode + 1)?;
+        std::mem::swap(&mut next.out, &mut slot.out);
+        *slot = next;
+        write_rows(setup, &slot.obs, &mut slot.out);
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -691,9 +755,11 @@ mod tests {
             }
         };
         assert_eq!(finished[0].seed, 40);
-        let m = env.current(0).unwrap();
-        assert!(m.is_finished());
-        assert_eq!(m.state_hash(), finished[0].state_hash);
+        let (over, hash) = env
+            .with_match(0, |m| (m.is_finished(), m.state_hash()))
+            .unwrap();
+        assert!(over);
+        assert_eq!(hash, finished[0].state_hash);
         assert_eq!(env.seeds(), vec![40]);
         assert!(matches!(
             env.step(&stay),
@@ -789,5 +855,120 @@ mod tests {
             env.step(&a),
             Err(VecEnvError::Action { robot: 5, .. })
         ));
+    }
+
+    /// Everything a run of steps returns, bits and all.
+    fn trace(threads: usize, steps: usize) -> Vec<String> {
+        let mut s = spec(5, "scripted", 0.2);
+        s.threads = threads;
+        s.decision = Some(serde_json::from_str(r#"{"mask_shoot": true, "pass": true}"#).unwrap());
+        let mut env = VecMatches::new(s).unwrap();
+        assert_eq!(env.threads(), threads.min(5));
+        let out = env.reset(7).unwrap();
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut trace = vec![format!("{:?} {:?}", bits(&out.obs), out.masks)];
+        // A fixed stream of valid actions (xorshift), the same for every run.
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..steps {
+            let actions: Vec<i64> = (0..20)
+                .map(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    (x % 6) as i64
+                })
+                .collect();
+            let out = env.step(&actions).unwrap();
+            trace.push(format!(
+                "{:?} {:?} {:?} {:?} {:?}",
+                bits(&out.obs),
+                bits(&out.rewards),
+                out.terminated,
+                out.masks,
+                out.finished
+                    .iter()
+                    .map(|f| (f.slot, f.seed, f.ticks, f.state_hash, bits(&f.obs)))
+                    .collect::<Vec<_>>()
+            ));
+            trace.push(format!("{:x?}", env.state_hashes()));
+        }
+        trace
+    }
+
+    /// The matches are the same, tick for tick and bit for bit, whatever the
+    /// number of threads stepping them (five slots: shares that do not
+    /// divide evenly; 300 steps: every slot's first match ends at 120 and
+    /// its second at 240).
+    #[test]
+    fn threads_do_not_change_the_matches() {
+        let one = trace(1, 300);
+        assert!(one.iter().any(|t| t.contains("true")), "matches ended");
+        for threads in [2, 3, 8] {
+            let other = trace(threads, 300);
+            let first = one.iter().zip(&other).position(|(a, b)| a != b);
+            assert_eq!(
+                first, None,
+                "threads {threads}: the first entry that differs"
+            );
+        }
+    }
+
+    /// A policy that meets its twin of the other slot at a barrier before
+    /// acting, so that the two slots are stepped at once, by two threads;
+    /// the one that panics records which thread it ran on.
+    struct Twin {
+        barrier: Arc<std::sync::Barrier>,
+        panics: Option<Arc<std::sync::Mutex<Option<String>>>>,
+    }
+
+    impl Policy for Twin {
+        fn act(&mut self, _: &Observation) -> Action {
+            self.barrier.wait();
+            if let Some(thread) = &self.panics {
+                *thread.lock().unwrap() = std::thread::current().name().map(String::from);
+                panic!("a robot's policy failed");
+            }
+            Action::Stay
+        }
+
+        fn name(&self) -> &str {
+            "twin"
+        }
+    }
+
+    /// A panic on a stepping thread comes back as an error (not a hang, not
+    /// a panic of the caller); stepping is refused until the next reset,
+    /// which plays on with the same threads.
+    #[test]
+    fn a_panic_on_a_worker_is_an_error() {
+        let mut env = VecMatches::new(spec(2, "idle", 0.1)).unwrap();
+        env.reset(3).unwrap();
+        let barrier = Arc::new(std::sync::Barrier::new(2));
+        let thread = Arc::new(std::sync::Mutex::new(None));
+        {
+            let pool = env.pool.as_ref().unwrap();
+            assert_eq!(pool.workers(), 1);
+            // The caller takes slot 0 first and waits at the barrier for
+            // slot 1, which only the worker can then be stepping.
+            pool.lock(0).policies[4] = Some(Box::new(Twin {
+                barrier: Arc::clone(&barrier),
+                panics: None,
+            }));
+            pool.lock(1).policies[4] = Some(Box::new(Twin {
+                barrier,
+                panics: Some(Arc::clone(&thread)),
+            }));
+        }
+        let stay = [4i64; 8];
+        let e = env.step(&stay).err().unwrap();
+        assert!(
+            matches!(&e, VecEnvError::Panicked(m) if m == "a robot's policy failed"),
+            "{e}"
+        );
+        assert_eq!(thread.lock().unwrap().as_deref(), Some("naosoccer-step-1"));
+        assert!(matches!(env.step(&stay), Err(VecEnvError::Panicked(_))));
+        env.reset(3).unwrap();
+        env.step(&stay).unwrap();
+        assert_eq!(env.ticks(), vec![1, 1]);
     }
 }
