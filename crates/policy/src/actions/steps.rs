@@ -134,6 +134,12 @@ pub fn approach_action(obs: &Observation, half: [f32; 2]) -> Action {
             };
             (target, SUPPORT_WALK_CONE)
         };
+    steer(me, target, cone)
+}
+
+/// The step of robot `me` heading for `target` (m): a turn toward it while
+/// it lies more than `cone` (rad) off the heading, `forward` otherwise.
+fn steer(me: &naosoccer_proto::RobotObs, target: [f32; 2], cone: f32) -> Action {
     let err = wrap_angle((target[1] - me.y).atan2(target[0] - me.x) - me.heading);
     if err.abs() > cone {
         if err > 0.0 {
@@ -208,16 +214,7 @@ pub fn defend_action(obs: &Observation, half: [f32; 2]) -> Action {
     } else if me.fallen {
         Action::Stay
     } else {
-        let err = wrap_angle((target[1] - me.y).atan2(target[0] - me.x) - me.heading);
-        if err.abs() > SUPPORT_WALK_CONE {
-            if err > 0.0 {
-                Action::TurnLeft
-            } else {
-                Action::TurnRight
-            }
-        } else {
-            Action::Forward
-        }
+        steer(me, target, SUPPORT_WALK_CONE)
     }
 }
 
