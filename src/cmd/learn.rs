@@ -69,7 +69,7 @@ pub struct TrainArgs {
         "support_action", "support_hold", "support_roles", "support_only", "support_spot",
         "approach_action", "approach_only", "defend_action", "own_goal_guard", "init_from", "pass_init", "support_init_bias",
         "central_critic", "minibatches", "entropy_coef", "gamma", "target_kl", "lr", "drill",
-        "pass_drills", "pass_drill_seconds", "pass_drill_angle", "obs_version", "opponent",
+        "scenarios", "scenario_matches", "obs_version", "opponent",
         "matches", "threads", "torch_threads", "config", "minutes", "learners", "teammates",
         "checkpoint_every", "rollout", "epochs", "shared", "n_step", "epsilon"])]
     recipe: Option<PathBuf>,
@@ -230,23 +230,25 @@ pub struct TrainArgs {
     /// degrees of straight behind it, facing it +-30 degrees.
     #[arg(long, hide = true, value_parser = ["anywhere", "behind"])]
     drill: Option<String>,
-    /// PPO team preset: of the --matches played side by side, the last N
-    /// play pass drills instead of whole matches: episodes of
-    /// --pass-drill-seconds that start with a learner's ball at its feet and
-    /// a teammate 1.2-2.5 m ahead in its line, facing the ball, the
-    /// opponents of the run's mix at least 1.2 m away; the match then plays
-    /// on. A drill's end is bootstrapped, as the match would go on.
-    #[arg(long, hide = true, value_name = "N")]
-    pass_drills: Option<usize>,
-    /// Length of one pass drill, seconds of game time; it must divide the
-    /// match's length.
-    #[arg(long, hide = true, default_value_t = 30.0, requires = "pass_drills")]
-    pass_drill_seconds: f32,
-    /// The pass drill receiver's largest angle off the kicker's heading,
-    /// degrees (0-90; default 8.6, 0.15 rad: in its line). Wider, the kicker
-    /// must turn with the ball to pass.
-    #[arg(long, hide = true, value_name = "DEG", requires = "pass_drills")]
-    pass_drill_angle: Option<f32>,
+    /// PPO team preset: scenario files (docs/SCENARIOS.md) the last
+    /// --scenario-matches of the --matches play instead of whole matches,
+    /// one episode after another, each from a scenario drawn from its seed,
+    /// against the run's opponents; an episode ends with its play and every
+    /// scenario match is cut at a match's length; a cut end is bootstrapped
+    /// (docs/SCENARIOS.md, "Training on drills"). Repeat the option or
+    /// separate files with commas; e.g. assets/scenarios/training/pass-*.toml,
+    /// the pass drills.
+    #[arg(
+        long,
+        hide = true,
+        value_name = "FILE",
+        value_delimiter = ',',
+        requires = "scenario_matches"
+    )]
+    scenarios: Vec<PathBuf>,
+    /// How many of the --matches play --scenarios (the last ones).
+    #[arg(long, hide = true, value_name = "N", requires = "scenarios")]
+    scenario_matches: Option<usize>,
     /// Observation layout version: 2 (the default), 3 (version 2 plus the
     /// pass picture: teammates seen from the robot, whether they face the
     /// ball, how clear the lane to them is) or 1 (the shipped paper-era
@@ -437,21 +439,15 @@ pub(crate) fn run_train(a: TrainArgs, tick: &mut dyn FnMut()) -> anyhow::Result<
         Some(_) => Some(naosoccer_learn::env::Drill::default()),
         None => None,
     };
-    if let Some(n) = a.pass_drills {
-        let hz = cfg.match_config.control_hz;
-        let ticks = f64::from(a.pass_drill_seconds) * f64::from(hz);
-        anyhow::ensure!(
-            a.pass_drill_seconds > 0.0 && (ticks - ticks.round()).abs() < 1e-6,
-            "--pass-drill-seconds {} is not a whole number of control ticks ({hz} a second)",
-            a.pass_drill_seconds
-        );
-        cfg.pass_drills = Some(naosoccer_learn::env::PassDrills {
+    if let Some(n) = a.scenario_matches {
+        let scenarios = a
+            .scenarios
+            .iter()
+            .map(|p| naosoccer_learn::env::ScenarioText::read(p))
+            .collect::<Result<Vec<_>, _>>()?;
+        cfg.scenarios = Some(naosoccer_learn::env::ScenarioDrills {
             matches: n,
-            ticks: ticks.round() as u64,
-            angle: a.pass_drill_angle.map_or(
-                naosoccer_learn::env::PassDrills::LANE_ANGLE,
-                f32::to_radians,
-            ),
+            scenarios,
         });
     }
     if let Some(e) = a.epsilon {

@@ -195,7 +195,19 @@ impl Stage {
                 toml::Value::String(s) => args.extend([flag, s.clone()]),
                 toml::Value::Integer(n) => args.extend([flag, n.to_string()]),
                 toml::Value::Float(x) => args.extend([flag, x.to_string()]),
-                _ => bail!("{}: must be a string, a number or a boolean", at(key)),
+                // A list: the option once per entry (e.g. `scenarios`).
+                toml::Value::Array(items) => {
+                    for item in items {
+                        let toml::Value::String(s) = item else {
+                            bail!("{}: a list holds strings", at(key));
+                        };
+                        args.extend([flag.clone(), s.clone()]);
+                    }
+                }
+                _ => bail!(
+                    "{}: must be a string, a number, a boolean or a list of strings",
+                    at(key)
+                ),
             }
         }
         Ok(Stage {

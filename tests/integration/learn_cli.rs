@@ -726,7 +726,11 @@ rollout = 32
 epochs = 2
 lr = 0.0001
 checkpoint-every = 512
-"#,
+scenarios = ["PASS0", "PASS1"]
+scenario-matches = 2
+"#
+        .replace("PASS0", &pass_drill(0))
+        .replace("PASS1", &pass_drill(1)),
     )
     .unwrap();
     let recipe_s = recipe.to_str().unwrap();
@@ -754,6 +758,16 @@ checkpoint-every = 512
     }
     let second_cfg = std::fs::read_to_string(whole.join("02-second/config.json")).unwrap();
     assert!(second_cfg.contains("01-first"), "{second_cfg}");
+    // The recipe's list of scenarios: the run keeps each file's name and text.
+    let second: serde_json::Value = serde_json::from_str(&second_cfg).unwrap();
+    let scenarios = &second["scenarios"];
+    assert_eq!(scenarios["matches"], 2, "{second_cfg}");
+    assert_eq!(scenarios["scenarios"][0]["name"], "pass-0");
+    assert_eq!(scenarios["scenarios"][1]["name"], "pass-1");
+    assert!(scenarios["scenarios"][1]["text"]
+        .as_str()
+        .unwrap()
+        .contains("direction"));
     let time: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(whole.join("time.json")).unwrap()).unwrap();
     assert_eq!(time["sittings"], 1);
@@ -880,4 +894,81 @@ checkpoint-every = 512
     assert!(!empty.exists(), "nothing written for a bad recipe");
     let out = naosoccer(&["train", "--recipe", recipe_s, "--steps", "5"]);
     assert!(!out.status.success(), "options beside --recipe are refused");
+}
+
+/// A shipped pass drill's path (assets/scenarios/training/pass-K.toml).
+#[cfg(feature = "train")]
+fn pass_drill(k: usize) -> String {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("assets/scenarios/training/pass-{k}.toml"))
+        .to_str()
+        .unwrap()
+        .to_owned()
+}
+
+/// `train --scenarios`: a missing or bad scenario file, or scenarios
+/// without the PPO team preset, are refused before anything is trained,
+/// naming what is wrong.
+#[cfg(feature = "train")]
+#[test]
+fn train_refuses_bad_scenarios() {
+    let out_dir = dir("scenarios_bad");
+    let base = [
+        "train",
+        "--algo",
+        "ppo",
+        "--preset",
+        "team",
+        "--minutes",
+        "0.1",
+        "--steps",
+        "64",
+        "--matches",
+        "4",
+        "--out",
+    ];
+    let bad = dir("scenario_bad").with_extension("toml");
+    std::fs::write(&bad, "[ball]\nx = 9.0\ny = 0.0\n").unwrap();
+    for (scenarios, matches, expect) in [
+        ("no-such-drill.toml".to_owned(), "2", "no-such-drill.toml"),
+        (bad.to_str().unwrap().to_owned(), "2", "ball.x"),
+        (pass_drill(0), "5", "between 1 and the 4 matches"),
+    ] {
+        let mut args = base.to_vec();
+        args.extend([
+            out_dir.to_str().unwrap(),
+            "--scenarios",
+            &scenarios,
+            "--scenario-matches",
+            matches,
+        ]);
+        let out = naosoccer(&args);
+        assert!(!out.status.success(), "{scenarios}");
+        let text = common::text(&out);
+        assert!(text.contains(expect), "{expect}: {text}");
+        assert!(!out_dir.join("final.safetensors").exists());
+    }
+    let out = naosoccer(&[
+        "train",
+        "--algo",
+        "dqn",
+        "--preset",
+        "team",
+        "--minutes",
+        "0.1",
+        "--steps",
+        "64",
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--scenarios",
+        &pass_drill(0),
+        "--scenario-matches",
+        "2",
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        common::text(&out).contains("PPO team preset"),
+        "{}",
+        common::text(&out)
+    );
 }

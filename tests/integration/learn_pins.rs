@@ -7,7 +7,7 @@
 //! it is moved around (environment, run harness and algorithms apart). Each
 //! run takes the paths a shipped team took: PPO's decision-level loop with
 //! warm-start weight surgery (`--init-from` a five-action team, gaining
-//! `pass` and `support`), pass drills cut and bootstrapped, an opponent
+//! `pass` and `support`), the pass drills (scenarios) cut and bootstrapped, an opponent
 //! schedule with its snapshot pool, episode ends, checkpoints with resume
 //! state; DQN's decision-level loop with n-step returns, its replay past
 //! warm-up, gradient steps, episode ends and checkpoints. A refactoring
@@ -66,7 +66,10 @@ const PPO_TEAM: &[&str] = &[
     "2",
     "--opponent",
     "schedule:scripted+scripted:assets/scripted/hound.toml+pool=2",
-    "--pass-drills",
+    "--scenarios",
+    "assets/scenarios/training/pass-0.toml,assets/scenarios/training/pass-1.toml,\
+     assets/scenarios/training/pass-2.toml,assets/scenarios/training/pass-3.toml",
+    "--scenario-matches",
     "4",
     "--pass-action",
     "--support-action",
@@ -96,8 +99,8 @@ const PPO_TEAM: &[&str] = &[
     "50000",
 ];
 
-const PPO_TEAM_METRICS: &str = "0c20fc7f7f2b18fc2c47343ff12810225192108cbbaff472b6a16816fd7bd89f";
-const PPO_TEAM_FINAL: &str = "19ca62d1f852dd6a6af38c08fb6406ceb85771344a7d93081db5b10432743e5b";
+const PPO_TEAM_METRICS: &str = "4afe13bf3cad0b13a26f2240514bef7205e7e3221afc01c595a4c25de7a3c1a7";
+const PPO_TEAM_FINAL: &str = "1ccc23763cfd3d8e247cb1ea7bd17a3bbc18d8cf70a5ad65a15a3718e70fd966";
 
 /// The shipped DQN team recipe, test-sized (see the module's comment).
 const DQN_TEAM: &[&str] = &[

@@ -1,4 +1,5 @@
-//! Probes a trained team on pass drills (`env::PassDrills`): the ball at a
+//! Probes a trained team on the pass drills (assets/scenarios/training/
+//! pass-*.toml, played for 10 s each as `env::ScenarioDrills`): the ball at a
 //! learner's feet, a teammate open ahead in its line, the opponents of a
 //! built-in team coming. For each 10-second drill it says what came first:
 //! a teammate's control (a pass, to the receiver placed in line or to
@@ -6,16 +7,13 @@
 //! nobody controlled it); and how often the kicker's first decision was to
 //! shoot.
 //!
-//! ANGLE (degrees) places the receiver up to that far off the kicker's
-//! heading (default: in its line, `PassDrills::LANE_ANGLE`).
-//!
-//! `cargo run --release -p naosoccer-learn --example probe_drill -- ppo:DIR [OPPONENT] [DRILLS] [SEED] [ANGLE]`
+//! `cargo run --release -p naosoccer-learn --example probe_drill -- ppo:DIR [OPPONENT] [DRILLS] [SEED]`
 
-use naosoccer_learn::env::{EnvConfig, Opponent, PassDrills, VecEnv};
+use naosoccer_learn::env::{EnvConfig, Opponent, ScenarioDrills, ScenarioText, VecEnv};
 use naosoccer_learn::LearnedPolicy;
 use naosoccer_policy::obs::ObsScale;
 use naosoccer_policy::PolicyKind;
-use naosoccer_proto::{Observation, Tick};
+use naosoccer_proto::Observation;
 use naosoccer_referee::MatchConfig;
 
 const OUTCOMES: [&str; 5] = [
@@ -30,7 +28,7 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let spec = args
         .first()
-        .expect("usage: probe_drill ppo:DIR [OPPONENT] [DRILLS] [SEED] [ANGLE]");
+        .expect("usage: probe_drill ppo:DIR [OPPONENT] [DRILLS] [SEED]");
     let opponent: PolicyKind = args
         .get(1)
         .map_or("scripted", String::as_str)
@@ -38,9 +36,8 @@ fn main() {
         .expect("opponent: a built-in team");
     let drills: usize = args.get(2).map_or(400, |s| s.parse().expect("DRILLS"));
     let seed: u64 = args.get(3).map_or(11, |s| s.parse().expect("SEED"));
-    let angle: f32 = args.get(4).map_or(PassDrills::LANE_ANGLE, |s| {
-        s.parse::<f32>().expect("ANGLE, degrees").to_radians()
-    });
+    // The receiver's largest angle off the kicker's heading in the drills.
+    let angle: f32 = 0.17;
     let cfg = MatchConfig::default();
     let scale = ObsScale::from_config(&cfg);
     let matches = 16;
@@ -57,12 +54,18 @@ fn main() {
         Opponent::Builtin(opponent),
     )
     .expect("environment");
-    env.set_pass_drills(Some(PassDrills {
-        matches,
-        ticks: 100,
-        angle,
-    }))
-    .expect("drills");
+    let root =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenarios/training");
+    let scenarios = (0..4)
+        .map(|k| {
+            let mut s =
+                ScenarioText::read(&root.join(format!("pass-{k}.toml"))).expect("pass drill");
+            s.text = s.text.replace("duration = 30.0", "duration = 10.0");
+            s
+        })
+        .collect();
+    env.set_scenarios(Some(&ScenarioDrills { matches, scenarios }))
+        .expect("drills");
     let mut team = LearnedPolicy::load(spec).expect("team");
     let rows = env.rows();
     let mut actions = vec![0usize; rows];
@@ -120,7 +123,7 @@ fn main() {
                 *s = start(&o.iter().collect::<Vec<_>>());
                 continue;
             }
-            if s.2.is_some() || o[0].tick == Tick::ZERO {
+            if s.2.is_some() {
                 continue;
             }
             if o[0].score != score[m] {

@@ -10,7 +10,7 @@ use naosoccer_policy::PolicyKind;
 use naosoccer_referee::MatchConfig;
 use serde::{Deserialize, Serialize};
 
-use crate::env::{Drill, PassDrills};
+use crate::env::{Drill, ScenarioDrills};
 use crate::obs::{ObsScale, OBS_VERSION};
 use crate::schedule::Schedule;
 
@@ -93,9 +93,14 @@ pub struct TrainConfig {
     /// Drill episodes instead of matches (see `env::Drill`).
     #[serde(default)]
     pub drill: Option<Drill>,
-    /// Pass drills mixed into the matches (see `env::PassDrills`).
-    #[serde(default)]
-    pub pass_drills: Option<PassDrills>,
+    /// Scenarios mixed into the matches (see `env::ScenarioDrills`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenarios: Option<ScenarioDrills>,
+    /// The pass drills of runs made before they became scenarios: kept so
+    /// that such a run's `config.json` still loads (a trained team plays
+    /// with it), and refused when such a run is resumed.
+    #[serde(default, skip_serializing)]
+    pub pass_drills: Option<serde_json::Value>,
     /// PPO team preset: the run starts from these weights (a finished run's
     /// `final.safetensors`, or a checkpoint) instead of fresh ones, with a
     /// fresh optimiser. An actor trained without `pass` gains it, its
@@ -133,6 +138,7 @@ impl TrainConfig {
             obs_scale: ObsScale::from_config(&match_config),
             match_config,
             drill: None,
+            scenarios: None,
             pass_drills: None,
             init_from: None,
             init_pass_from: None,

@@ -119,7 +119,7 @@ pub fn train(
                 tr.push(&c, dec_val[next], false, &mut link);
             });
             let finished = env.step(dec.actions())?;
-            // Episodes cut short (pass drills) are bootstrapped with the
+            // Episodes cut short (scenarios) are bootstrapped with the
             // critic's value of the state where they were cut.
             dec.cut_critic_rows(&env, &mut cut_rows, &mut cut_cobs);
             cut_val.resize(cut_rows.len(), 0.0);

@@ -653,21 +653,76 @@ fn a_resumed_run_writes_what_an_uninterrupted_one_does() {
     resume_matches_an_uninterrupted_run(None, "resume");
 }
 
-/// The same with pass drills in two of the four matches (20-tick drills in
-/// the 60-tick matches): cut episodes and their bootstraps resume bit for
-/// bit too.
+/// The same with scenarios in two of the four matches (the pass drill cut
+/// to 2 s, and a drill with absent robots that a goal or 3.5 s ends, in
+/// the 60-tick matches): scenario episodes, their cuts and bootstraps
+/// resume bit for bit too.
 #[test]
-fn a_resumed_run_with_pass_drills_writes_what_an_uninterrupted_one_does() {
-    let drills = naosoccer_learn::env::PassDrills {
+fn a_resumed_run_with_scenarios_writes_what_an_uninterrupted_one_does() {
+    let drills = naosoccer_learn::env::ScenarioDrills {
         matches: 2,
-        ticks: 20,
-        angle: 1.0,
+        scenarios: vec![
+            scenario_text(
+                "pass-0",
+                &pass_drill(0).replace("duration = 30.0", "duration = 2.0"),
+            ),
+            scenario_text("shot", SHOT),
+        ],
     };
     resume_matches_an_uninterrupted_run(Some(drills), "resume_drills");
 }
 
+fn scenario_text(name: &str, text: &str) -> naosoccer_learn::env::ScenarioText {
+    naosoccer_learn::env::ScenarioText {
+        name: name.into(),
+        text: text.into(),
+    }
+}
+
+/// The shipped pass drill for own player `k` (assets/scenarios/training).
+fn pass_drill(k: usize) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("../../assets/scenarios/training/pass-{k}.toml"));
+    std::fs::read_to_string(path).unwrap()
+}
+
+/// Two learners before the opponent goal, the rest absent.
+const SHOT: &str = r#"
+duration = 3.5
+
+[ball]
+x = [1.5, 2.0]
+y = [-0.5, 0.5]
+
+[[robot]]
+side = "own"
+player = 1
+from = "ball"
+x = -0.2
+y = 0.0
+heading = "ball"
+
+[[robot]]
+side = "own"
+player = 2
+x = 0.5
+y = 1.0
+heading = "ball"
+
+[[robot]]
+side = "opponent"
+player = 0
+x = 2.6
+y = 0.0
+heading = 3.14159
+
+[[end]]
+when = "goal_for"
+outcome = "success"
+"#;
+
 fn resume_matches_an_uninterrupted_run(
-    drills: Option<naosoccer_learn::env::PassDrills>,
+    drills: Option<naosoccer_learn::env::ScenarioDrills>,
     name: &str,
 ) {
     use naosoccer_learn::config::PpoConfig;
@@ -686,7 +741,8 @@ fn resume_matches_an_uninterrupted_run(
     let mut sched = Schedule::parse("idle@2000,random+pool").unwrap();
     sched.pool_every = 1500;
     cfg.opponent = OpponentSpec::Schedule(sched);
-    cfg.pass_drills = drills;
+    let scenario_matches = drills.as_ref().map_or(0, |d| d.matches) as u64;
+    cfg.scenarios = drills;
 
     let whole = out_dir(&format!("{name}_whole"));
     tch::manual_seed(cfg.seed as i64);
@@ -726,11 +782,7 @@ fn resume_matches_an_uninterrupted_run(
         .unwrap()
         .parse()
         .unwrap();
-    assert_eq!(
-        episodes,
-        6 * (4 - drills.map_or(0, |d| d.matches) as u64),
-        "{a}"
-    );
+    assert_eq!(episodes, 6 * (4 - scenario_matches), "{a}");
     let wa = std::fs::read(whole.join("final.safetensors")).unwrap();
     let wb = std::fs::read(split.join("final.safetensors")).unwrap();
     assert!(wa == wb, "resumed final weights differ");
@@ -1051,25 +1103,26 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
     }
 }
 
-/// Pass drills (`--pass-drills`): the last matches of the batch play short
-/// episodes staged as a pass: a learner with the ball in kick reach, a
-/// teammate ahead in its line facing the ball, the opponents (playing the
-/// scripted team) away from ball and lane, no set play. The episodes are cut
-/// (truncated, their final observations kept for the bootstrap) every drill
-/// length, are not reported as finished matches, and every match still ends
-/// together at a match's end. A drill that does not divide the match, more
-/// drill matches than matches, or a receiver angle past 90 degrees is
-/// refused.
+/// Scenarios (`--scenarios`): the last matches of the batch play episodes
+/// of scenario files, each starting exactly where the scenario drawn from
+/// its episode's seed says. An episode ends with its play (here 7 s) and
+/// the next starts at once; the episodes are cut (truncated, their final
+/// observations kept for the bootstrap), are not reported as finished
+/// matches, and every match still starts afresh together at a match's end,
+/// the last scenario episode cut short there. Robots a scenario leaves out
+/// are out of play and never asked to decide. Bad settings are refused.
 #[test]
-fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
-    use naosoccer_learn::env::PassDrills;
+fn scenarios_play_episodes_and_cut_at_a_match_s_end() {
+    use naosoccer_learn::env::decisions::Decisions;
+    use naosoccer_learn::env::{episode_seed, ScenarioDrills};
     use naosoccer_policy::obs::ObsScale;
+    use naosoccer_proto::{RobotId, Team};
+    use naosoccer_referee::{Match, Scenario};
 
     let cfg = MatchConfig {
         minutes: 1.0,
         ..MatchConfig::default()
     };
-    let scale = ObsScale::from_config(&cfg);
     let mut env = VecEnv::new(
         &cfg,
         EnvConfig {
@@ -1083,87 +1136,92 @@ fn pass_drills_stage_a_pass_and_cut_without_ending_the_match() {
         Opponent::Builtin(PolicyKind::Scripted),
     )
     .unwrap();
+    let shot = SHOT.replace("duration = 3.5", "duration = 7.0");
+    let drills = |matches: usize, scenarios: Vec<naosoccer_learn::env::ScenarioText>| {
+        ScenarioDrills { matches, scenarios }
+    };
     for bad in [
-        PassDrills {
-            matches: 2,
-            ticks: 70,
-            angle: PassDrills::LANE_ANGLE,
-        },
-        PassDrills {
-            matches: 5,
-            ticks: 60,
-            angle: PassDrills::LANE_ANGLE,
-        },
-        PassDrills {
-            matches: 0,
-            ticks: 60,
-            angle: PassDrills::LANE_ANGLE,
-        },
-        PassDrills {
-            matches: 2,
-            ticks: 60,
-            angle: 2.0,
-        },
+        drills(5, vec![scenario_text("shot", &shot)]),
+        drills(0, vec![scenario_text("shot", &shot)]),
+        drills(2, vec![]),
+        drills(2, vec![scenario_text("far", "[ball]\nx = 4.0\ny = 0\n")]),
+        drills(2, vec![scenario_text("typo", "[ball]\nz = 1.0\n")]),
     ] {
-        assert!(env.set_pass_drills(Some(bad)).is_err(), "{bad:?}");
+        assert!(env.set_scenarios(Some(&bad)).is_err(), "{bad:?}");
     }
-    env.set_pass_drills(Some(PassDrills {
-        matches: 2,
-        ticks: 60,
-        angle: PassDrills::LANE_ANGLE,
-    }))
-    .unwrap();
+    env.set_scenarios(Some(&drills(2, vec![scenario_text("shot", &shot)])))
+        .unwrap();
+    let scenario = Scenario::from_toml(&shot, None).unwrap();
     let rows = env.rows();
     let drill_row = |r: usize| r >= rows / 2;
+    // Each scenario match's episode starts where its seed puts it.
+    let mut episodes = [0u64; 4];
     let mut staged = 0;
-    let mut check_start = |env: &VecEnv| {
-        for m in 2..4 {
-            let obs: Vec<_> = (0..4).map(|p| env.learner_observation(m * 4 + p)).collect();
-            let o = obs[0];
-            assert_eq!(o.tick, Tick::ZERO);
-            assert!(o.set_play.is_none(), "{:?}", o.set_play);
-            let kickers: Vec<usize> = (0..4).filter(|&p| scale.kick.in_reach(obs[p])).collect();
-            assert_eq!(kickers.len(), 1, "one kicker: {kickers:?}");
-            let k = o.own[kickers[0]];
-            let (bx, by) = (o.ball.x, o.ball.y);
-            let receivers = (0..4).filter(|&p| {
-                let r = o.own[p];
-                let d = (r.x - bx).hypot(r.y - by);
-                let off = ((r.y - by).atan2(r.x - bx) - k.heading + std::f32::consts::PI)
-                    .rem_euclid(std::f32::consts::TAU)
-                    - std::f32::consts::PI;
-                (1.1..=2.6).contains(&d) && off.abs() < 0.3
-            });
-            assert!(receivers.count() >= 1, "a teammate in the kicker's line");
-            assert!(k.heading.abs() <= std::f32::consts::FRAC_PI_3 + 0.01);
-            for r in &o.opponents[1..] {
-                assert!((r.x - bx).hypot(r.y - by) >= 1.1, "opponent near the ball");
-            }
-            staged += 1;
+    let mut check_start = |env: &VecEnv, m: usize, episode: u64| {
+        let team = if m.is_multiple_of(2) {
+            Team::Blue
+        } else {
+            Team::Red
+        };
+        let fresh =
+            Match::with_scenario(&cfg, episode_seed(3, m, episode), &scenario, team).unwrap();
+        for p in 0..4 {
+            let mut o = naosoccer_referee::blank_observation();
+            fresh.observe_into(team, p, &mut o);
+            assert_eq!(
+                env.learner_observation(m * 4 + p),
+                &o,
+                "match {m} player {p}"
+            );
+            let robot = RobotId::new(team, p).unwrap();
+            assert_eq!(env.in_play(m * 4 + p), !fresh.is_out_of_play(robot));
         }
+        staged += 1;
     };
-    check_start(&env);
-    let actions = vec![0usize; rows];
+    for m in 2..4 {
+        check_start(&env, m, 0);
+    }
+    let mut decisions: Decisions<()> = Decisions::new(
+        &env,
+        DecisionConfig::team(),
+        ObsScale::from_config(&cfg),
+        0,
+        0.99,
+    );
     let mut reported = 0;
     for t in 1..=600u64 {
-        reported += env.step(&actions).unwrap().len();
-        for r in 0..rows {
-            let cut = t % 60 == 0 && drill_row(r);
-            let end = t == 600;
-            assert_eq!(env.dones()[r], cut || end, "row {r} tick {t}");
-            assert_eq!(env.truncated()[r], cut, "row {r} tick {t}");
+        let asked = decisions.ask(&env);
+        for &r in &asked.rows {
+            // Players 0 and 3 are absent from the scenario.
+            assert!(!drill_row(r) || [1, 2].contains(&(r % 4)), "row {r} asked");
         }
-        if t % 60 == 0 {
-            // The cut state is kept: its clock still runs (a whole minute's
-            // match, 60 ticks of it played).
+        let n = asked.rows.len();
+        decisions.decide(&env, &vec![4; n], &vec![(); n], &mut |_| {});
+        let actions = decisions.actions().to_vec();
+        reported += env.step(&actions).unwrap().len();
+        decisions.observe(&env, &mut |_| {});
+        let cut = t % 70 == 0 || t == 600;
+        for r in 0..rows {
+            let end = t == 600;
+            assert_eq!(
+                env.dones()[r],
+                (cut && drill_row(r)) || end,
+                "row {r} tick {t}"
+            );
+            assert_eq!(env.truncated()[r], cut && drill_row(r), "row {r} tick {t}");
+        }
+        if cut && t < 600 {
             let f = &env.final_observations()[(rows - 1) * OBS_DIM..rows * OBS_DIM];
             assert!(f.iter().all(|v| v.is_finite()));
-            check_start(&env);
+            for (m, e) in episodes.iter_mut().enumerate().skip(2) {
+                *e += 1;
+                check_start(&env, m, *e);
+            }
         }
     }
-    // The two whole matches ended; the drills' 20 episodes are not reported.
+    // The two whole matches ended; the scenario episodes are not reported.
     assert_eq!(reported, 2);
-    assert_eq!(staged, 2 * 11);
+    assert_eq!(staged, 2 * 9);
 }
 
 /// The team preset's actor widened action by action: five actions, then

@@ -103,6 +103,10 @@ struct BallFile {
     vx: Draw,
     #[serde(default)]
     vy: Draw,
+    /// Radians: robots placed from the ball, and the ball's velocity, are
+    /// turned by it.
+    #[serde(default)]
+    direction: Draw,
 }
 
 /// Where x and y of a robot are measured from.
@@ -213,6 +217,9 @@ pub struct Scenario {
     /// the match).
     pub duration: Option<f32>,
     ball: [Draw; 4],
+    /// The play's direction: turns the offsets and numeric headings of
+    /// robots placed from the ball, and the ball's velocity.
+    direction: Draw,
     pub robots: Vec<RobotSpec>,
     score: ScoreFile,
     half: u8,
@@ -261,13 +268,14 @@ impl Scenario {
     /// when the file has no `name`.
     pub fn from_toml(text: &str, stem: Option<&str>) -> Result<Scenario, ScenarioError> {
         let f: ScenarioFile = toml::from_str(text)?;
-        let ball = match &f.ball {
-            Some(b) => [b.x, b.y, b.vx, b.vy],
-            None => [Draw::Fixed(0.0); 4],
+        let (ball, direction) = match &f.ball {
+            Some(b) => ([b.x, b.y, b.vx, b.vy], b.direction),
+            None => ([Draw::Fixed(0.0); 4], Draw::Fixed(0.0)),
         };
         for (v, field) in ball.iter().zip(["ball.x", "ball.y", "ball.vx", "ball.vy"]) {
             v.check(field)?;
         }
+        direction.check("ball.direction")?;
         let mut seen = [false; ROBOTS];
         for (k, r) in f.robot.iter().enumerate() {
             let field = |name: &str| format!("robot[{k}].{name}");
@@ -366,6 +374,7 @@ impl Scenario {
             opponent,
             duration: f.duration,
             ball,
+            direction,
             robots: f.robot,
             score: s.score,
             half,
@@ -453,13 +462,18 @@ impl Scenario {
     }
 
     /// The start for the own team playing `own` in a match of `seed`:
-    /// every range drawn (ball x, y, vx, vy, then each robot's x, y and
+    /// every range drawn (ball x, y, vx, vy, direction, then each robot's x, y and
     /// heading in file order) from a ChaCha8 generator seeded by the
     /// match seed, and the file's frame turned into the world's. Call
     /// [`Scenario::check`] first.
     pub fn draw(&self, cfg: &MatchConfig, seed: u64, own: Team) -> Start {
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ STREAM);
         let [bx, by, vx, vy] = self.ball.map(|d| d.draw(&mut rng));
+        // The play's direction (none: 0, and nothing drawn).
+        let dir = self.direction.draw(&mut rng);
+        let (sin, cos) = dir.sin_cos();
+        let turned = |x: f32, y: f32| (x * cos - y * sin, x * sin + y * cos);
+        let (vx, vy) = turned(vx, vy);
         // The file's frame to the world's: red sees the world turned.
         let (sign, turn) = match own {
             Team::Blue => (1.0, 0.0),
@@ -471,9 +485,13 @@ impl Scenario {
             let (dx, dy) = (r.x.draw(&mut rng), r.y.draw(&mut rng));
             let (x, y) = match r.from {
                 Origin::Centre => (dx, dy),
-                Origin::Ball => (bx + dx, by + dy),
+                Origin::Ball => {
+                    let (tx, ty) = turned(dx, dy);
+                    (bx + tx, by + ty)
+                }
             };
             let h = match r.heading {
+                Heading::Angle(d) if r.from == Origin::Ball => d.draw(&mut rng) + dir,
                 Heading::Angle(d) => d.draw(&mut rng),
                 Heading::Ball => (by - y).atan2(bx - x),
                 // The goal its own team attacks: +x for the own team.

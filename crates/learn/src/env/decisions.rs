@@ -6,7 +6,7 @@
 //! decision stays open while it is held: its rewards accumulate, discounted
 //! per tick (`sum gamma^i r_i`, and `gamma^ticks`). It closes, and comes out
 //! as one [`Closed`] transition, when the robot next decides, when its
-//! episode ends or is cut (a pass drill's end), or at a rollout's edge
+//! episode ends or is cut (a scenario's end), or at a rollout's edge
 //! ([`Decisions::cut`]). The learners ([`crate::ppo`], [`crate::dqn`])
 //! only choose actions for the deciding robots and store what closes.
 //!
@@ -41,7 +41,7 @@ pub enum End {
     Decided { next: usize, shoot_ok: bool },
     /// The episode ended: nothing follows.
     Ended,
-    /// The episode was cut (a pass drill's end) while the match would go
+    /// The episode was cut (a scenario's end) while the match would go
     /// on: the next state is the robot's row of
     /// [`VecEnv::final_observations`].
     Cut,
@@ -143,6 +143,11 @@ impl<P: Copy> Decisions<P> {
         let dim = self.scale.dim();
         for (r, hold) in self.holds.iter_mut().enumerate() {
             let o = env.learner_observation(r);
+            if !env.in_play(r) {
+                // Absent from its scenario: its actions are ignored.
+                self.actions[r] = NetAction::Stay.index();
+                continue;
+            }
             if hold.must_decide(o) {
                 a.rows.push(r);
                 a.obs

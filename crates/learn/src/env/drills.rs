@@ -1,59 +1,63 @@
-//! Staged episodes: a pass drill mixed into a run's matches, or a drill
-//! instead of a match, each placed from its episode's seed.
+//! Staged episodes: scenarios mixed into a run's matches, or a drill
+//! instead of a match, each drawn from its episode's seed.
 
-use naosoccer_proto::{RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
-use naosoccer_referee::rules::segment_distance;
+use std::sync::Arc;
+
+use naosoccer_proto::{RobotId, Team, PLAYERS_PER_TEAM};
+use naosoccer_referee::{Match, MatchConfig, Scenario};
 
 use super::{episode_seed, EnvConfig, Slot, VecEnv};
 use crate::LearnError;
 
-/// Pass drills mixed into a run's matches: the last `matches` of the
-/// matches played side by side (with an even number, as many as blue as as
-/// red) play episodes of `ticks` control ticks, each staged as a pass.
+/// Scenarios mixed into a run's matches (docs/SCENARIOS.md, "Training on
+/// drills"): the last `matches` of the matches played side by side play
+/// scenario episodes instead of whole matches, each starting from one of
+/// `scenarios` (drawn from the episode's seed, all equally likely), the
+/// learning team as the scenario's own team, against the episode's
+/// opponent from the run's mix (not the file's `opponent`).
 ///
-/// In the learner's frame (attacking +x): the ball at a random spot
-/// (x in -2..1.5, |y| <= 1.6), a learning robot 0.2 m behind it with the
-/// ball straight ahead, facing within 60 degrees of the opponent goal;
-/// a teammate 1.2-2.5 m further on, within `angle` of the kicker's heading
-/// (0.15 rad, 9 degrees, by default: in its line) and ahead of the ball
-/// (toward the opponent goal, so that a pass to it is paid), facing the
-/// ball; the other teammates anywhere in the
-/// field at least 1 m from the ball; the opponent keeper before its goal
-/// and the other opponents at least 1.2 m from the ball and 0.5 m from the
-/// line from ball to receiver, facing the ball. The match then plays on
-/// as any match, against the episode's opponent from the run's mix.
-///
-/// A drill episode is cut after `ticks` ticks as a rollout's edge cuts one:
-/// its last transition is bootstrapped with the critic's value of the state
-/// reached, since the match would go on (the observation's clock says so).
-/// `ticks` must divide a match's length, so that every match still ends
-/// together at a match's end (a checkpoint's boundary). Drill episodes are
-/// not reported among finished episodes (goals, returns).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct PassDrills {
+/// An episode ends when its play ends (one of the file's end conditions,
+/// its `duration`) and the next starts at once; every scenario match's
+/// episode is also cut when a whole match's length of control ticks has
+/// passed since the matches started together, so that every match still
+/// starts afresh together at a match's end (a checkpoint's boundary). An
+/// ending other than the match's own end is a cut: its last transition is
+/// bootstrapped with the critic's value of the state reached, since the
+/// match would go on. Scenario episodes are not reported among finished
+/// episodes (goals, returns). Robots a file does not list are out of play:
+/// a learning robot out of play does not decide.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ScenarioDrills {
     pub matches: usize,
-    pub ticks: u64,
-    /// The receiver's largest angle off the kicker's heading, radians:
-    /// small, it stands in the kicker's line; wide, the kicker must turn
-    /// with the ball to pass.
-    #[serde(default = "PassDrills::default_angle")]
-    pub angle: f32,
+    /// The scenario files, read: a run directory's `config.json` keeps
+    /// what it trained on.
+    pub scenarios: Vec<ScenarioText>,
 }
 
-impl PassDrills {
-    /// Distance from the kicker's torso to the ball's centre at the start.
-    pub const KICKER_DISTANCE: f32 = 0.2;
-    /// The receiver's distance from the ball, metres.
-    pub const RECEIVER: (f32, f32) = (1.2, 2.5);
-    /// The receiver's largest angle off the kicker's heading by default,
-    /// radians.
-    pub const LANE_ANGLE: f32 = 0.15;
+/// A scenario file's name and text.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ScenarioText {
+    pub name: String,
+    pub text: String,
+}
 
-    fn default_angle() -> f32 {
-        Self::LANE_ANGLE
+impl ScenarioText {
+    /// Reads a scenario file (named by its stem), checking that it parses.
+    pub fn read(path: &std::path::Path) -> Result<ScenarioText, LearnError> {
+        let s = Scenario::from_file(path)
+            .map_err(|e| LearnError::Config(format!("{}: {e}", path.display())))?;
+        Ok(ScenarioText {
+            name: s.name,
+            text: s.source,
+        })
     }
-    /// The kicker's largest heading off +x, radians (60 degrees).
-    pub const HEADING: f32 = std::f32::consts::FRAC_PI_3;
+
+    fn parse(&self, cfg: &MatchConfig) -> Result<Scenario, LearnError> {
+        let s = Scenario::from_toml(&self.text, Some(&self.name))
+            .and_then(|s| s.check(cfg).map(|()| s))
+            .map_err(|e| LearnError::Config(format!("scenario {}: {e}", self.name)))?;
+        Ok(s)
+    }
 }
 
 /// A drill instead of a match: the learning robots alone before the
@@ -119,39 +123,42 @@ impl VecEnv {
         self.restart_at(&episodes, self.ticks)
     }
 
-    /// Plays pass drills in the last `drills.matches` matches (`None`: none);
-    /// every match starts its current episode afresh. See [`PassDrills`].
-    pub fn set_pass_drills(&mut self, drills: Option<PassDrills>) -> Result<(), LearnError> {
+    /// Plays scenario episodes in the last `drills.matches` matches
+    /// (`None`: none); every match starts its current episode afresh. See
+    /// [`ScenarioDrills`].
+    pub fn set_scenarios(&mut self, drills: Option<&ScenarioDrills>) -> Result<(), LearnError> {
+        let mut list = None;
         if let Some(d) = drills {
-            let total = self.slots[0].m.total_ticks();
             if d.matches == 0 || d.matches > self.slots.len() {
                 return Err(LearnError::Config(format!(
-                    "pass drills in {} matches: between 1 and the {} matches played",
+                    "scenarios in {} matches: between 1 and the {} matches played",
                     d.matches,
                     self.slots.len()
                 )));
             }
-            if d.ticks == 0 || !total.is_multiple_of(d.ticks) {
-                return Err(LearnError::Config(format!(
-                    "a pass drill of {} ticks must divide the match's {total} ticks",
-                    d.ticks
-                )));
-            }
-            if !(0.0..=std::f32::consts::FRAC_PI_2).contains(&d.angle) {
-                return Err(LearnError::Config(format!(
-                    "a pass drill's receiver angle of {} rad: between 0 and pi/2",
-                    d.angle
-                )));
+            if d.scenarios.is_empty() {
+                return Err(LearnError::Config(
+                    "scenario matches need a scenario".into(),
+                ));
             }
             if self.slots.iter().any(|s| s.drill.is_some()) {
                 return Err(LearnError::Config(
-                    "pass drills mix into matches, not into drills".into(),
+                    "scenarios mix into matches, not into drills".into(),
                 ));
             }
+            let parsed = d
+                .scenarios
+                .iter()
+                .map(|t| t.parse(&self.cfg))
+                .collect::<Result<Vec<_>, _>>()?;
+            list = Some((d.matches, Arc::new(parsed)));
         }
         let n = self.slots.len();
         for (i, slot) in self.slots.iter_mut().enumerate() {
-            slot.pass_drill = drills.filter(|d| i >= n - d.matches);
+            slot.scenarios = list
+                .as_ref()
+                .filter(|(m, _)| i >= n - m)
+                .map(|(_, l)| Arc::clone(l));
         }
         let episodes = self.episodes();
         self.restart_at(&episodes, self.ticks)
@@ -180,86 +187,32 @@ impl Slot {
         }
     }
 
-    /// Stages a pass drill episode (see [`PassDrills`]), placed from the
-    /// episode's seed.
-    pub(super) fn place_pass_drill(&mut self, env: &EnvConfig) {
-        let Some(drill) = self.pass_drill else {
-            return;
-        };
-        use rand::Rng;
-        let mut rng = self.episode_rng(env, 0x9A55_D111_1D00);
-        let half_x = self.m.config().sim.field_length * 0.5;
-        let half_y = self.m.config().sim.field_width * 0.5;
-        // Kicker and receiver: two own players, learners first.
-        let mut own: Vec<usize> = (0..PLAYERS_PER_TEAM).collect();
-        own.sort_by_key(|p| !env.learners.contains(p));
-        let learners = env.learners.len().max(1);
-        let kicker = own[rng.random_range(0..learners)];
-        own.retain(|&p| p != kicker);
-        let receiver = own.remove(rng.random_range(0..own.len().min(learners.max(2) - 1)));
-        // Ball, kicker heading and receiver, drawn until the receiver stands
-        // inside the field (0.3 m from the lines).
-        let (mut ball, mut heading, mut recv) = ((0.0, 0.0), 0.0f32, (0.0, 0.0, 0.0));
-        for _ in 0..32 {
-            ball = (
-                rng.random_range(-2.0..=1.5f32),
-                rng.random_range(-1.6..=1.6f32),
-            );
-            heading = rng.random_range(-PassDrills::HEADING..=PassDrills::HEADING);
-            let d = rng.random_range(PassDrills::RECEIVER.0..=PassDrills::RECEIVER.1);
-            let a = heading + rng.random_range(-drill.angle..=drill.angle);
-            let (x, y) = (ball.0 + d * a.cos(), ball.1 + d * a.sin());
-            recv = (x, y, a + std::f32::consts::PI);
-            if x.abs() <= half_x - 0.3 && y.abs() <= half_y - 0.3 && x - ball.0 >= 0.3 {
-                break;
+    /// Starts this episode's match: from a scenario drawn from the
+    /// episode's seed when the match plays scenarios, else from the
+    /// kick-off (placed as a [`Drill`] when it plays one).
+    pub(super) fn start_episode(
+        &mut self,
+        cfg: &MatchConfig,
+        env: &EnvConfig,
+    ) -> Result<(), LearnError> {
+        let seed = episode_seed(env.seed, self.index, self.episode);
+        self.judge = None;
+        match self.scenarios.clone() {
+            Some(list) => {
+                use rand::Rng;
+                let k = self
+                    .episode_rng(env, 0x5CE7_A410_D111)
+                    .random_range(0..list.len());
+                let s = &list[k];
+                self.m = Match::with_scenario(cfg, seed, s, self.team)?;
+                self.judge = Some(s.judge(cfg, self.team, self.m.tick()));
+            }
+            None => {
+                self.m = Match::new(cfg, seed)?;
+                self.place_drill(env);
             }
         }
-        recv.0 = recv.0.clamp(-half_x + 0.3, half_x - 0.3);
-        recv.1 = recv.1.clamp(-half_y + 0.3, half_y - 0.3);
-        let k = PassDrills::KICKER_DISTANCE;
-        let mut spots = [(0.0f32, 0.0f32, 0.0f32); ROBOTS];
-        let base = self.team.index() * PLAYERS_PER_TEAM;
-        let foe = self.team.other().index() * PLAYERS_PER_TEAM;
-        spots[base + kicker] = (
-            ball.0 - k * heading.cos(),
-            ball.1 - k * heading.sin(),
-            heading,
-        );
-        spots[base + receiver] = recv;
-        let facing = |x: f32, y: f32| (ball.1 - y).atan2(ball.0 - x);
-        // A spot at least `min` from the ball (and `lane` from the line ball
-        // to receiver), drawn in the x range given.
-        let draw = |rng: &mut rand_chacha::ChaCha8Rng, xs: (f32, f32), min: f32, lane: f32| {
-            let mut p = (0.0, 0.0);
-            for _ in 0..32 {
-                p = (
-                    rng.random_range(xs.0..=xs.1),
-                    rng.random_range(-(half_y - 0.45)..=(half_y - 0.45)),
-                );
-                let far = (p.0 - ball.0).hypot(p.1 - ball.1) >= min;
-                if far && segment_distance([ball.0, ball.1], [recv.0, recv.1], [p.0, p.1]) >= lane {
-                    break;
-                }
-            }
-            (p.0, p.1, facing(p.0, p.1))
-        };
-        for &p in &own {
-            spots[base + p] = draw(&mut rng, (-(half_x - 0.4), half_x - 0.4), 1.0, 0.0);
-        }
-        spots[foe] = (
-            half_x - 0.4,
-            rng.random_range(-0.5..=0.5f32),
-            std::f32::consts::PI,
-        );
-        for p in 1..PLAYERS_PER_TEAM {
-            spots[foe + p] = draw(&mut rng, (-2.0, half_x - 0.4), 1.2, 0.5);
-        }
-        let (sign, turn) = self.to_world();
-        let world = spots.map(|(x, y, h)| (sign * x, sign * y, h + turn));
-        self.m
-            .sim_mut()
-            .place_all((sign * ball.0, sign * ball.1), &world);
-        self.m.clear_set_play();
+        Ok(())
     }
 
     /// Sets up a drill episode (see [`Drill`]), placed from the episode's

@@ -14,8 +14,8 @@
 //! on: holds, masks and open decisions, each closed decision one transition.
 
 use naosoccer_policy::{Policy, PolicyKind};
-use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
-use naosoccer_referee::{Match, MatchConfig};
+use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
+use naosoccer_referee::{Judge, Match, MatchConfig, Scenario};
 
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
@@ -23,7 +23,7 @@ use crate::LearnError;
 pub mod decisions;
 mod drills;
 mod opponents;
-pub use drills::{Drill, PassDrills};
+pub use drills::{Drill, ScenarioDrills, ScenarioText};
 pub use naosoccer_policy::BatchActor;
 use naosoccer_policy::{to_action, NetAction, SupportSpot};
 use opponents::Mix;
@@ -70,8 +70,15 @@ struct Slot {
     /// Index of this episode's opponent.
     opp: usize,
     drill: Option<Drill>,
-    /// This match plays these pass drills.
-    pass_drill: Option<PassDrills>,
+    /// This match plays episodes of these scenarios ([`ScenarioDrills`]),
+    /// judged by `judge`, and cuts them every `window_len` ticks.
+    scenarios: Option<std::sync::Arc<Vec<Scenario>>>,
+    judge: Option<Judge>,
+    /// Ticks since the matches last started together, and a match's length.
+    window: u64,
+    window_len: u64,
+    /// The last tick's events (read by the judge).
+    events: Vec<Event>,
 }
 
 /// The vectorised environment.
@@ -87,7 +94,7 @@ pub struct VecEnv {
     feats: Vec<f32>,
     rewards: Vec<f32>,
     dones: Vec<bool>,
-    /// Rows whose episode was cut (a pass drill's end) with the last step.
+    /// Rows whose episode was cut (a scenario's end) with the last step.
     truncated: Vec<bool>,
     /// Those rows' observation vectors at the cut (before the restart).
     final_feats: Vec<f32>,
@@ -123,6 +130,7 @@ impl VecEnv {
                 Team::Red
             };
             let m = Match::new(cfg, episode_seed(env.seed, index, 0))?;
+            let window_len = m.total_ticks();
             let mut slot = Slot {
                 index,
                 obs: (0..ROBOTS)
@@ -136,7 +144,11 @@ impl VecEnv {
                 finished: None,
                 opp: 0,
                 drill: None,
-                pass_drill: None,
+                scenarios: None,
+                judge: None,
+                window: 0,
+                window_len,
+                events: Vec::new(),
             };
             slot.build_policies(&env, &mix);
             slot.observe_all();
@@ -203,7 +215,7 @@ impl VecEnv {
     }
 
     /// Whether each row's episode ended with the last step by being cut (a
-    /// pass drill's end, [`PassDrills`]) rather than by the match's end:
+    /// scenario's end, [`ScenarioDrills`]) rather than by the match's end:
     /// its last transition is then bootstrapped from [`Self::final_observations`].
     pub fn truncated(&self) -> &[bool] {
         &self.truncated
@@ -232,6 +244,16 @@ impl VecEnv {
         let l = self.env.learners.len();
         let slot = &self.slots[row / l];
         &slot.obs[slot.team.index() * PLAYERS_PER_TEAM + self.env.learners[row % l]]
+    }
+
+    /// Whether row `row`'s robot is in play (not absent from the scenario
+    /// its match started from).
+    pub fn in_play(&self, row: usize) -> bool {
+        let l = self.env.learners.len();
+        let slot = &self.slots[row / l];
+        let robot = RobotId::new(slot.team, self.env.learners[row % l])
+            .expect("learners are players of a team");
+        !slot.m.is_out_of_play(robot)
     }
 
     /// Replaces the opponent (self-play: a newer snapshot).
@@ -269,9 +291,8 @@ impl VecEnv {
         let l = self.env.learners.len();
         for (slot, &e) in self.slots.iter_mut().zip(episodes) {
             slot.episode = e;
-            slot.m = Match::new(&self.cfg, episode_seed(self.env.seed, slot.index, e))?;
-            slot.place_drill(&self.env);
-            slot.place_pass_drill(&self.env);
+            slot.window = 0;
+            slot.start_episode(&self.cfg, &self.env)?;
             slot.returns = vec![0.0; l];
             slot.finished = None;
             slot.build_policies(&self.env, &self.mix);
@@ -506,7 +527,17 @@ impl Slot {
             }
         }
         let score = self.m.score();
-        self.m.step(&joint);
+        let ended = match &self.judge {
+            Some(judge) => {
+                self.events.clear();
+                self.events.extend_from_slice(self.m.step(&joint));
+                judge.check(&self.m, &self.events).is_some()
+            }
+            None => {
+                self.m.step(&joint);
+                false
+            }
+        };
         self.observe_all();
         // Each observation carries its robot's reward for the tick
         // (`Match::reward`, what the server sends too).
@@ -515,11 +546,17 @@ impl Slot {
             rewards[k] = r;
             self.returns[k] += r;
         }
+        // A scenario match's window: every match starts afresh together
+        // at a match's end.
+        self.window += 1;
+        let window_end = self.scenarios.is_some() && self.window >= self.window_len;
+        if window_end {
+            self.window = 0;
+        }
         self.m.is_finished()
             || (self.drill.is_some() && self.m.score() != score)
-            || self
-                .pass_drill
-                .is_some_and(|d| self.m.tick().get() >= d.ticks)
+            || ended
+            || window_end
     }
 
     fn restart(&mut self, cfg: &MatchConfig, env: &EnvConfig, mix: &Mix) -> Result<(), LearnError> {
@@ -530,7 +567,7 @@ impl Slot {
             (red, blue)
         };
         let returns = std::mem::replace(&mut self.returns, vec![0.0; env.learners.len()]);
-        self.finished = self.pass_drill.is_none().then(|| Episode {
+        self.finished = self.scenarios.is_none().then(|| Episode {
             match_index: self.index,
             learner_team: self.team,
             goals_for: gf,
@@ -540,9 +577,7 @@ impl Slot {
             ticks: self.m.tick().get(),
         });
         self.episode += 1;
-        self.m = Match::new(cfg, episode_seed(env.seed, self.index, self.episode))?;
-        self.place_drill(env);
-        self.place_pass_drill(env);
+        self.start_episode(cfg, env)?;
         self.build_policies(env, mix);
         self.observe_all();
         Ok(())

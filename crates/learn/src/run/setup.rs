@@ -171,13 +171,20 @@ pub(crate) fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
         env.set_drill(cfg.drill)?;
     }
     if cfg.pass_drills.is_some() {
+        return Err(LearnError::Config(
+            "this run was made with the pass drills of naosoccer before they became scenarios \
+             (assets/scenarios/training/pass-*.toml); resume it with that version"
+                .into(),
+        ));
+    }
+    if let Some(drills) = &cfg.scenarios {
         if !matches!(cfg.algo, Algo::Ppo) || cfg.ppo.decision.is_none() {
             return Err(LearnError::Config(
-                "pass drills need the PPO team preset (its loop bootstraps a drill's cut end)"
+                "scenarios need the PPO team preset (its loop bootstraps a scenario's cut end)"
                     .into(),
             ));
         }
-        env.set_pass_drills(cfg.pass_drills)?;
+        env.set_scenarios(Some(drills))?;
     }
     Ok(env)
 }

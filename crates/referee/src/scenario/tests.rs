@@ -176,6 +176,86 @@ fn ranges_are_drawn_from_the_seed() {
     assert!(ys.iter().all(|y| y.abs() <= 0.5 + 1e-3), "{ys:?}");
 }
 
+/// `ball.direction` turns the robots placed from the ball (offsets and
+/// numeric headings) and the ball's velocity, as one rigid group; robots
+/// placed from the centre stay where they are.
+#[test]
+fn the_direction_turns_the_robots_placed_from_the_ball() {
+    let text = r#"
+[ball]
+x = 0.5
+y = 0.2
+vx = 1.0
+direction = [-1.0, 1.0]
+
+[[robot]]
+side = "own"
+player = 1
+from = "ball"
+x = -0.2
+y = 0.0
+heading = 0.0
+
+[[robot]]
+side = "own"
+player = 2
+from = "ball"
+x = 1.5
+y = 0.0
+heading = "ball"
+
+[[robot]]
+side = "opponent"
+player = 0
+x = 2.6
+y = 0.0
+heading = 3.0
+"#;
+    let s = Scenario::from_toml(text, None).unwrap();
+    let straight = Scenario::from_toml(&text.replace("direction = [-1.0, 1.0]", ""), None).unwrap();
+    let mut dirs = Vec::new();
+    for seed in 0..12 {
+        let start = s.draw(&cfg(), seed, Team::Blue);
+        let kicker = start.robots[1].unwrap();
+        let receiver = start.robots[2].unwrap();
+        // The kicker 0.2 m behind the ball along the direction, facing it.
+        let d = kicker.heading;
+        assert!((-1.0 - 1e-6..=1.0 + 1e-6).contains(&d), "{d}");
+        assert!(
+            (kicker.x - (0.5 - 0.2 * d.cos())).abs() < 1e-5,
+            "{kicker:?}"
+        );
+        assert!(
+            (kicker.y - (0.2 - 0.2 * d.sin())).abs() < 1e-5,
+            "{kicker:?}"
+        );
+        // The receiver 1.5 m on in the kicker's line, facing the ball.
+        assert!(
+            (receiver.x - (0.5 + 1.5 * d.cos())).abs() < 1e-5,
+            "{receiver:?}"
+        );
+        assert!(
+            (receiver.y - (0.2 + 1.5 * d.sin())).abs() < 1e-5,
+            "{receiver:?}"
+        );
+        assert!(wrap(receiver.heading - (d + std::f32::consts::PI)).abs() < 1e-4);
+        let (vx, vy) = start.ball_velocity;
+        assert!((vx - d.cos()).abs() < 1e-5 && (vy - d.sin()).abs() < 1e-5);
+        // From the centre: untouched.
+        assert_eq!(
+            start.robots[4],
+            straight.draw(&cfg(), seed, Team::Blue).robots[4]
+        );
+        dirs.push(d);
+    }
+    assert!(dirs.windows(2).any(|w| w[0] != w[1]), "{dirs:?}");
+    // Without a direction nothing is turned (and nothing more is drawn).
+    let plain = straight.draw(&cfg(), 3, Team::Blue);
+    assert_eq!(plain.robots[1].unwrap().heading, 0.0);
+    assert_eq!(plain.ball_velocity, (1.0, 0.0));
+    assert!(err("[ball]\nx = 0\ny = 0\ndirection = [1.0, 0.0]\n").contains("ball.direction"));
+}
+
 #[test]
 fn absent_robots_stay_out_of_play() {
     let s = Scenario::from_toml(EMPTY_GOAL, None).unwrap();
