@@ -2,7 +2,6 @@
 //! the command line, built with the `train` feature. Wall-clock rates are measured here, at the edge; the
 //! library's results never depend on them.
 
-use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -322,12 +321,17 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
         );
         return super::recipe::run(dir);
     }
-    run_train(a, &mut || {})
+    run_train(a, None, &mut || {})
 }
 
 /// One `train` run; `tick` is called with every progress report (a recipe
-/// keeps its time file with it).
-pub(crate) fn run_train(a: TrainArgs, tick: &mut dyn FnMut()) -> anyhow::Result<()> {
+/// keeps its time file with it); `stage` names the recipe stage in the
+/// progress bar.
+pub(crate) fn run_train(
+    a: TrainArgs,
+    stage: Option<&str>,
+    tick: &mut dyn FnMut(),
+) -> anyhow::Result<()> {
     tch::set_num_threads(a.torch_threads.max(1));
     let mcfg = match_config(a.config.as_ref(), a.minutes)?;
     let algo = a.algo.unwrap_or(Algo::Ppo);
@@ -457,7 +461,28 @@ pub(crate) fn run_train(a: TrainArgs, tick: &mut dyn FnMut()) -> anyhow::Result<
         }
     }
     let start = Instant::now();
-    let tty = std::io::stderr().is_terminal();
+    // On a terminal, a progress bar (indicatif); in a log, a line every few
+    // seconds.
+    let bar = indicatif::ProgressBar::with_draw_target(
+        Some(cfg.steps),
+        indicatif::ProgressDrawTarget::stderr_with_hz(4),
+    );
+    let tty = !bar.is_hidden();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{prefix} [{elapsed_precise}] [{bar:24}] {percent:>3}% {human_pos}/{human_len} transitions, {msg}",
+        )
+        .expect("a valid progress template")
+        .progress_chars("#> "),
+    );
+    bar.set_prefix(
+        stage
+            .unwrap_or(match algo {
+                Algo::Ppo => "train ppo",
+                Algo::Dqn => "train dqn",
+            })
+            .to_string(),
+    );
     let mut last_print = 0.0f64;
     // Matches end together, so most rows have no finished episode: show the
     // latest episodes that did finish.
@@ -475,35 +500,36 @@ pub(crate) fn run_train(a: TrainArgs, tick: &mut dyn FnMut()) -> anyhow::Result<
             );
         }
         let secs = start.elapsed().as_secs_f64();
-        // On a terminal, one line redrawn; in a log, a line every few seconds.
-        if !tty && secs - last_print < 5.0 && p.row.transitions < p.total_steps {
-            return;
-        }
-        last_print = secs;
-        let frac = p.row.transitions as f64 / p.total_steps as f64;
-        let filled = (frac * 24.0).round() as usize;
-        let line = format!(
-            "[{}{}] {:>5.1}% {} transitions, {:.0}/s, reward/tick {:.4}, {}",
-            "#".repeat(filled.min(24)),
-            " ".repeat(24 - filled.min(24)),
-            100.0 * frac.min(1.0),
-            p.row.transitions,
+        let msg = format!(
+            "{:.0}/s, reward/tick {:.4}, {}",
             since as f64 / secs.max(1e-9),
             p.row.reward,
             last_episodes,
         );
-        let mut err = std::io::stderr();
         if tty {
-            let _ = write!(err, "\r{line}\x1b[K");
-        } else {
-            let _ = writeln!(err, "{line}");
+            bar.set_length(p.total_steps);
+            bar.set_position(p.row.transitions.min(p.total_steps));
+            bar.set_message(msg);
+            return;
         }
+        if secs - last_print < 5.0 && p.row.transitions < p.total_steps {
+            return;
+        }
+        last_print = secs;
+        let frac = p.row.transitions as f64 / p.total_steps as f64;
+        eprintln!(
+            "{} {:>5.1}% {} transitions, {msg}",
+            bar.prefix(),
+            100.0 * frac.min(1.0),
+            p.row.transitions,
+        );
     };
     let summary = match (&a.resume, &a.out) {
         (Some(dir), _) => naosoccer_learn::train::resume(dir, a.steps, &mut show)?,
         (None, Some(out)) => train(&cfg, out, &mut show)?,
         (None, None) => anyhow::bail!("--out DIR is needed (or --resume DIR)"),
     };
+    bar.finish();
     if tty {
         eprintln!();
     }

@@ -348,7 +348,8 @@ pub fn run(dir: &Path) -> anyhow::Result<()> {
         let started = Instant::now();
         let mut last_save = 0.0f64;
         let mut save_err = None;
-        run_train(cmd.args, &mut || {
+        let label = format!("stage {}/{n} {name}", i + 1);
+        run_train(cmd.args, Some(&label), &mut || {
             let secs = started.elapsed().as_secs_f64();
             if secs - last_save >= 10.0 {
                 last_save = secs;
