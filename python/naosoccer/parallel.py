@@ -13,7 +13,7 @@ import json
 import os
 import types
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import gymnasium
 import numpy as np
@@ -22,8 +22,7 @@ from pettingzoo import AECEnv, ParallelEnv
 from pettingzoo.utils.conversions import parallel_to_aec_wrapper
 from pettingzoo.utils.wrappers import AssertOutOfBoundsWrapper, OrderEnforcingWrapper
 
-from .protocol import scenario_text
-from .vector import ACTION_NAMES, _require_native, team_layout
+from .vector import ACTION_NAMES, ScenarioArg, _require_native, _scenario_args, team_layout
 
 #: The observation layout of the shipped ``ppo-team`` teams
 #: (assets/policies/ppo-team-seed1/config.json): the envs' default.
@@ -64,7 +63,9 @@ class ParallelMatchEnv(ParallelEnv):
     * one ``step`` is one control tick; the episode is the match (or the
       scenario's play): on its last step every agent is terminated and the
       infos add ``score``, ``stats``, ``seed``, ``ticks``, ``state_hash``
-      (and ``scenario``);
+      (and ``scenario``: ``name``, ``ending``, ``success``, ``ticks``);
+    * ``scenario`` may be a list: each reset's match draws one from its
+      seed (``scenario_weights``), as :class:`naosoccer.VectorEnv`'s matches;
     * ``state()``: the world-frame global state, entries
       :attr:`state_names`; ``render()`` with ``render_mode="rgb_array"``: the
       top view ``naosoccer render --gif`` draws, uint8 ``(H, W, 3)``.
@@ -88,7 +89,8 @@ class ParallelMatchEnv(ParallelEnv):
         decision: Optional[Mapping[str, Any]] = TEAM_DECISION,
         like: Optional[str] = None,
         match_config: Optional[Union[str, "os.PathLike[str]"]] = None,
-        scenario: Optional[Union[str, "os.PathLike[str]"]] = None,
+        scenario: Optional[ScenarioArg] = None,
+        scenario_weights: Optional[Sequence[float]] = None,
         render_mode: Optional[str] = None,
         render_width: int = 640,
     ) -> None:
@@ -106,7 +108,8 @@ class ParallelMatchEnv(ParallelEnv):
             obs_version = TEAM_OBS_VERSION
         config_toml = Path(match_config).read_text() if match_config is not None else None
         self.team = team
-        self.scenario = scenario_text(scenario) if scenario is not None else None
+        #: The scenario's TOML text, or the list's texts (``None``: the kick-off).
+        self.scenario, weights = _scenario_args(scenario, scenario_weights)
         self.obs_version = int(obs_version)
         self.decision = dict(decision) if decision is not None else None
         self.render_mode = render_mode
@@ -122,8 +125,10 @@ class ParallelMatchEnv(ParallelEnv):
             1,
             self.scenario,
             restart=False,
+            scenario_weights=weights,
         )
-        #: The opponents' policy spec as resolved (``None`` with ``team="both"``).
+        #: The opponents' policy spec as resolved (``None`` with ``team="both"``;
+        #: ``"per scenario"``: each match plays its own scenario's).
         self.opponent = None if team == "both" else self._native.opponent
         _, robots, dim, actions = self._native.shape
         self.num_actions = actions
@@ -260,7 +265,8 @@ def parallel_env(**kwargs: Any) -> ParallelMatchEnv:
     """One match in this process as a PettingZoo ``ParallelEnv``. Options
     (keywords): ``team``, ``opponent``, ``minutes``, ``seed``,
     ``obs_version``, ``decision``, ``like``, ``match_config``, ``scenario``,
-    ``render_mode``, ``render_width`` (docs/PYTHON.md)."""
+    ``scenario_weights``, ``render_mode``, ``render_width``
+    (docs/PYTHON.md)."""
     return ParallelMatchEnv(**kwargs)
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 from gymnasium import spaces
@@ -45,6 +45,42 @@ ACTION_NAMES = (
 )
 
 _TEAMS = ("blue", "red", "both")
+
+#: ``scenario=``: a path, a scenario's TOML text, or a sequence of them.
+ScenarioArg = Union[str, "os.PathLike[str]", Sequence[Union[str, "os.PathLike[str]"]]]
+
+
+def _scenario_args(
+    scenario: Optional[ScenarioArg], weights: Optional[Sequence[float]]
+) -> Tuple[Union[None, str, List[str]], Optional[List[float]]]:
+    """The in-process envs' ``scenario`` and ``scenario_weights`` as the
+    native extension takes them: one scenario's text (a path or a text, as
+    :func:`naosoccer.protocol.scenario_text` reads it), or for any other
+    sequence (a list, a tuple) the list of its entries' texts; the weights
+    as floats. An empty list, and weights that are not numbers, raise
+    ``ValueError``; the extension checks the rest."""
+    if scenario is None:
+        texts: Union[None, str, List[str]] = None
+    elif isinstance(scenario, (str, bytes, os.PathLike)):
+        texts = scenario_text(scenario)
+    else:
+        try:
+            entries = list(scenario)
+        except TypeError:
+            raise TypeError(
+                f"scenario is a path, a scenario's TOML text or a list of them, got {type(scenario).__name__}"
+            ) from None
+        if not entries:
+            raise ValueError("scenario: an empty list: give at least one scenario")
+        texts = [scenario_text(s) for s in entries]
+    if weights is None:
+        return texts, None
+    if isinstance(weights, (str, bytes)):
+        raise ValueError(f"scenario_weights: a sequence of numbers, one a scenario, got {weights!r}")
+    try:
+        return texts, [float(w) for w in weights]
+    except (TypeError, ValueError):
+        raise ValueError(f"scenario_weights: a sequence of numbers, one a scenario, got {weights!r}") from None
 
 
 def _require_native() -> Any:
@@ -99,11 +135,19 @@ class VectorEnv(_GymVectorEnv):
     scenario (docs/SCENARIOS.md), drawn from its seed, with ``team`` as the
     scenario's own team (blue with ``team="both"``), and ends (terminated)
     when the scenario's play ends; its ``final_info`` then holds
-    ``scenario``: ``ending`` (the end condition's name), ``success`` and
-    ``ticks`` (played from the scenario's start). The restarted match starts
-    from the scenario again. ``opponent`` defaults to the file's
-    ``opponent`` then, as in ``naosoccer match --scenario``; without a
-    scenario to ``"scripted"``.
+    ``scenario``: ``name`` (the scenario's), ``ending`` (the end condition's
+    name), ``success`` and ``ticks`` (played from the scenario's start). The
+    restarted match starts from the scenario again. ``opponent`` defaults to
+    the file's ``opponent`` then, as in ``naosoccer match --scenario``;
+    without a scenario to ``"scripted"``.
+
+    ``scenario`` may also be a list (any sequence) of scenarios: every match
+    start (each reset's, each restart) draws one from the match's seed, with
+    chances in proportion to ``scenario_weights`` (one non-negative number
+    a scenario; default equal). ``opponent`` then defaults to the one the
+    files name; where they name different built-in policies each match
+    plays its own scenario's (``env.opponent`` is ``"per scenario"``), and a
+    trained team among them needs ``opponent=`` (docs/PYTHON.md).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
@@ -121,7 +165,8 @@ class VectorEnv(_GymVectorEnv):
         like: Optional[str] = None,
         match_config: Optional[Union[str, os.PathLike]] = None,
         threads: Optional[int] = None,
-        scenario: Optional[Union[str, "os.PathLike[str]"]] = None,
+        scenario: Optional[ScenarioArg] = None,
+        scenario_weights: Optional[Sequence[float]] = None,
     ) -> None:
         native = _require_native()
         if team not in _TEAMS:
@@ -136,7 +181,8 @@ class VectorEnv(_GymVectorEnv):
         if threads is None:
             threads = min(os.cpu_count() or 1, num_matches)
         self.team = team
-        self.scenario = scenario_text(scenario) if scenario is not None else None
+        #: The scenario's TOML text, or the list's texts (``None``: the kick-off).
+        self.scenario, weights = _scenario_args(scenario, scenario_weights)
         self.obs_version = int(obs_version)
         self.decision = dict(decision) if decision is not None else None
         self._native = native.VecMatches(
@@ -149,8 +195,10 @@ class VectorEnv(_GymVectorEnv):
             minutes,
             threads,
             self.scenario,
+            scenario_weights=weights,
         )
-        #: The opponents' policy spec as resolved (``None`` with ``team="both"``).
+        #: The opponents' policy spec as resolved (``None`` with ``team="both"``;
+        #: ``"per scenario"``: each match plays its own scenario's).
         self.opponent = None if team == "both" else self._native.opponent
         #: Threads stepping the matches, this one included (at most ``num_matches``).
         self.threads = self._native.threads

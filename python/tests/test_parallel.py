@@ -252,6 +252,35 @@ def test_a_scenario_ends_with_its_play(binary):
     assert infos["blue_1"]["scenario"]["ticks"] == cli["scenario"]["ticks"]
 
 
+def test_a_list_of_scenarios_draws_one_per_reset():
+    # Each reset's match draws its scenario from its seed, as the vector
+    # env's match of that seed does; the end infos name it.
+    drills = {"empty-goal-close": "assets/scenarios/empty-goal-close.toml",
+              "1-vs-1-keeper": "assets/scenarios/1-vs-1-keeper.toml"}
+    env = naosoccer.parallel_env(scenario=list(drills.values()), obs_version=2, decision=None)
+    assert env.opponent == "per scenario"
+    names = set()
+    for seed in range(40, 46):
+        env.reset(seed=seed)
+        start = env.state_hash()
+        infos, steps = play_out(env, 3)                        # everyone shoots
+        ending = infos["blue_1"]["scenario"]
+        assert ending["ticks"] == steps and ending["name"] in drills
+        names.add(ending["name"])
+        alone = naosoccer.parallel_env(scenario=drills[ending["name"]], obs_version=2, decision=None)
+        alone.reset(seed=seed)
+        assert alone.state_hash() == start, seed
+        vec = VectorEnv(1, scenario=list(drills.values()), obs_version=2)
+        vec.reset(seed=seed)
+        assert vec.state_hashes() == [start]
+        for _ in range(steps):
+            _, _, term, _, vinfos = vec.step(np.full((1, 4), 3))
+        assert term[0] and vinfos["final_info"]["state_hash"][0] == infos["blue_1"]["state_hash"]
+    assert names == set(drills), names
+    with pytest.raises(ValueError, match="^scenario_weights: "):
+        naosoccer.parallel_env(scenario=list(drills.values()), scenario_weights=[1, -1])
+
+
 def test_seeds_follow_on():
     env = naosoccer.parallel_env(minutes=0.1, seed=30)
     env.reset()

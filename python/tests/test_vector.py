@@ -252,3 +252,113 @@ def test_a_scenario_plays_as_the_cli_scenario_match(binary, team):
         assert finals[i]["state_hash"] == cli["state_hash"], (team, i)
         assert finals[i]["ending"] == cli["scenario"]["ending"]
         assert finals[i]["ticks"] == cli["scenario"]["ticks"]
+
+
+
+KEEPER = "assets/scenarios/1-vs-1-keeper.toml"
+DRILLS = [SCENARIO, KEEPER]
+NAMES = {SCENARIO: "empty-goal-close", KEEPER: "1-vs-1-keeper"}
+SHOOT = 3
+
+
+def drill_finals(env, count, seed=None):
+    """(seed, scenario name, state hash) of the first ``count`` matches that
+    end after ``reset(seed=seed)``, every robot shooting, in the order they
+    end (slot order within a step)."""
+    env.reset(seed=seed)
+    finals = []
+    while len(finals) < count:
+        _, _, term, _, infos = env.step(np.full((env.num_envs, env.robots), SHOOT))
+        for i in np.flatnonzero(term):
+            final = infos["final_info"]
+            assert {k for k in final["scenario"] if not k.startswith("_")} == {"name", "ending", "success", "ticks"}
+            finals.append((int(final["seed"][i]), str(final["scenario"]["name"][i]), final["state_hash"][i]))
+    return finals[:count]
+
+
+def test_a_list_of_scenarios_draws_one_per_match():
+    # The two drills name different built-in opponents (idle, scripted):
+    # each match plays its own drill's.
+    env = VectorEnv(4, scenario=DRILLS, seed=5, threads=3)
+    assert env.opponent == "per scenario"
+    finals = drill_finals(env, 12)
+    assert {name for _, name, _ in finals} == set(NAMES.values()), finals
+    # The same seed, the same scenarios and matches, with any threads.
+    assert drill_finals(VectorEnv(4, scenario=DRILLS, seed=5, threads=1), 12) == finals
+    # Each match is its scenario's alone, opponents included; restarts too.
+    for seed, name, state_hash in finals[:2] + finals[-2:]:
+        path = next(p for p in DRILLS if NAMES[p] == name)
+        alone = VectorEnv(1, scenario=path)
+        assert drill_finals(alone, 1, seed=seed) == [(seed, name, state_hash)]
+
+
+def test_the_draw_follows_the_weights():
+    # Right after a reset each slot's match is at the start of the scenario
+    # it drew, the start that scenario alone draws for the match's seed.
+    def starts(**kwargs):
+        env = VectorEnv(16, threads=1, **kwargs)
+        env.reset(seed=40)
+        return env.state_hashes()
+
+    near, keeper = starts(scenario=SCENARIO), starts(scenario=KEEPER)
+    assert all(a != b for a, b in zip(near, keeper))
+    drawn = starts(scenario=DRILLS)
+    assert all(h in (a, b) for h, a, b in zip(drawn, near, keeper))
+    assert set(near) & set(drawn) and set(keeper) & set(drawn), "both drawn"
+    assert starts(scenario=DRILLS, scenario_weights=[1, 3]) != drawn
+    # A scenario of weight 0 is never drawn; a tuple is a list too.
+    assert starts(scenario=DRILLS, scenario_weights=[0, 2.5]) == keeper
+    assert starts(scenario=tuple(DRILLS), scenario_weights=(1, 0)) == near
+
+
+def test_a_list_of_one_is_the_scenario_alone():
+    def trace(scenario, **kwargs):
+        env = VectorEnv(2, scenario=scenario, seed=21, threads=1, **kwargs)
+        assert env.opponent == "idle"
+        env.reset()
+        hashes = [env.state_hashes()]
+        for _ in range(200):                                   # the first matches end, then more
+            _, _, term, _, infos = env.step(np.full((2, 4), SHOOT))
+            hashes.append((env.state_hashes(), list(infos.get("final_info", {}).get("state_hash", []))))
+        return hashes
+
+    alone = trace(SCENARIO)
+    assert trace([SCENARIO]) == alone
+    assert trace([SCENARIO], scenario_weights=[4]) == alone
+    assert trace(SCENARIO, scenario_weights=[1.0]) == alone
+
+
+def test_list_opponents():
+    # Files that name the same opponent: that one; an opponent given: it.
+    assert VectorEnv(1, scenario=[SCENARIO, SCENARIO]).opponent == "idle"
+    assert VectorEnv(1, scenario=DRILLS, opponent="random").opponent == "random"
+    assert VectorEnv(1, team="both", scenario=DRILLS).opponent is None
+    # A trained team among different opponents needs `opponent=`.
+    trained = open(KEEPER).read().replace('opponent = "scripted"', f'opponent = "ppo:{TEAM}"')
+    with pytest.raises(ValueError, match=r"scenario\[1\] \(1-vs-1-keeper\).*pass opponent="):
+        VectorEnv(1, scenario=[SCENARIO, trained])
+    env = VectorEnv(1, scenario=[SCENARIO, trained], opponent=f"ppo:{TEAM}")
+    assert env.opponent == f"ppo:{TEAM}"
+    # All naming the same trained team: it plays every match.
+    assert VectorEnv(1, scenario=[trained, trained]).opponent == f"ppo:{TEAM}"
+
+
+@pytest.mark.parametrize("weights", [[1], [1, 2, 3], [1, -1], [float("nan"), 1], [float("inf"), 1],
+                                     [0, 0], ["a", 1], "11", 2])
+def test_bad_weights_raise(weights):
+    with pytest.raises(ValueError, match="^scenario_weights: "):
+        VectorEnv(1, scenario=DRILLS, scenario_weights=weights)
+
+
+def test_bad_lists_raise():
+    with pytest.raises(ValueError, match="^scenario: an empty list"):
+        VectorEnv(1, scenario=[])
+    with pytest.raises(ValueError, match="^scenario_weights: given without a scenario"):
+        VectorEnv(1, scenario_weights=[1])
+    far = 'name = "far"\n[ball]\nx = 4.0\ny = 0\n'
+    with pytest.raises(ValueError, match=r"^scenario\[1\] \(far\): .*`ball.x`"):
+        VectorEnv(1, scenario=[SCENARIO, far])
+    with pytest.raises(ValueError, match=r"^scenario\[0\]: invalid scenario"):
+        VectorEnv(1, scenario=["name = 3\n", SCENARIO])
+    with pytest.raises(FileNotFoundError):
+        VectorEnv(1, scenario=[SCENARIO, "no-such-file.toml"])

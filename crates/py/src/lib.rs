@@ -42,10 +42,15 @@ impl From<VecEnvError> for PyErr {
 /// N matches stepped in process, one control tick a step.
 ///
 /// `VecMatches(num_matches, team, opponent, obs_version, decision_json,
-/// config_toml, minutes, threads, scenario_toml, restart=True)`; see
-/// `naosoccer.VectorEnv` and `naosoccer.parallel_env`, which wrap it.
-/// `opponent` `None`: the scenario's `opponent`, else `scripted`.
-/// `restart=False`: a finished match stays until the next `reset`.
+/// config_toml, minutes, threads, scenario_toml, restart=True,
+/// scenario_weights=None)`; see `naosoccer.VectorEnv` and
+/// `naosoccer.parallel_env`, which wrap it. `scenario_toml`: one scenario's
+/// text, or a list of them, each match start drawing one from its seed
+/// with chances in proportion to `scenario_weights` (default equal).
+/// `opponent` `None`: the one the scenarios name, each scenario's own when
+/// they name different built-in policies (`opponent` is then `"per
+/// scenario"`), `scripted` without a scenario. `restart=False`: a finished
+/// match stays until the next `reset`.
 /// `close()` stops the stepping threads and frees the matches.
 #[pyclass(module = "naosoccer._native", name = "VecMatches")]
 struct VecMatchesPy {
@@ -54,14 +59,21 @@ struct VecMatchesPy {
     // closed.
     inner: Mutex<Option<VecMatches>>,
     shape: (usize, usize, usize, usize),
-    opponent: String,
+    opponent: Option<String>,
     control_hz: f32,
+}
+
+/// `scenario_toml`: one scenario's text or a list of them.
+#[derive(FromPyObject)]
+enum ScenarioTexts {
+    One(String),
+    Many(Vec<String>),
 }
 
 #[pymethods]
 impl VecMatchesPy {
     #[new]
-    #[pyo3(signature = (num_matches, team, opponent, obs_version, decision_json=None, config_toml=None, minutes=None, threads=1, scenario_toml=None, restart=true))]
+    #[pyo3(signature = (num_matches, team, opponent, obs_version, decision_json=None, config_toml=None, minutes=None, threads=1, scenario_toml=None, restart=true, scenario_weights=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         num_matches: usize,
@@ -72,8 +84,9 @@ impl VecMatchesPy {
         config_toml: Option<&str>,
         minutes: Option<f32>,
         threads: usize,
-        scenario_toml: Option<&str>,
+        scenario_toml: Option<ScenarioTexts>,
         restart: bool,
+        scenario_weights: Option<Vec<f64>>,
     ) -> PyResult<Self> {
         let mut config = match config_toml {
             Some(t) => MatchConfig::from_toml_str(t).map_err(value_error)?,
@@ -89,28 +102,45 @@ impl VecMatchesPy {
             ),
             None => None,
         };
-        let scenario = match scenario_toml {
-            Some(t) => Some(Scenario::from_toml(t, None).map_err(value_error)?),
-            None => None,
-        };
-        // As `naosoccer match --scenario`: the file's opponents unless named.
-        let opponent = match (opponent, &scenario) {
-            (Some(o), _) => o.to_owned(),
-            (None, Some(s)) => s.opponent.clone(),
-            (None, None) => "scripted".to_owned(),
+        let scenarios = match scenario_toml {
+            None => Vec::new(),
+            Some(ScenarioTexts::One(t)) => {
+                vec![Scenario::from_toml(&t, None).map_err(value_error)?]
+            }
+            Some(ScenarioTexts::Many(texts)) if texts.is_empty() => {
+                return Err(value_error(
+                    "scenario: an empty list: give at least one scenario",
+                ))
+            }
+            // With two or more, an error names the entry by its place (a
+            // text that does not parse has no name yet).
+            Some(ScenarioTexts::Many(texts)) => texts
+                .iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    Scenario::from_toml(t, None).map_err(|e| match texts.len() {
+                        1 => value_error(e),
+                        _ => value_error(format!("scenario[{i}]: {e}")),
+                    })
+                })
+                .collect::<PyResult<_>>()?,
         };
         let control_hz = config.control_hz;
+        // As `naosoccer match --scenario`: the files' opponents unless
+        // named (VecMatches::opponent).
         let env = VecMatches::new(EnvSpec {
             matches: num_matches,
             controlled: Controlled::parse(team)?,
-            opponent: opponent.clone(),
+            opponent: opponent.map(str::to_owned),
             config,
             obs_version,
             decision,
             threads,
-            scenario,
+            scenarios,
+            scenario_weights,
             restart,
         })?;
+        let opponent = env.opponent().map(str::to_owned);
         let shape = (
             env.num_matches(),
             env.robots(),
@@ -125,11 +155,12 @@ impl VecMatchesPy {
         })
     }
 
-    /// The opponents' policy spec, as resolved (`opponent`, else the
-    /// scenario's, else `scripted`).
+    /// The opponents' policy spec, as resolved (`opponent`, else the one
+    /// the scenarios name, else `"per scenario"`: each match its own
+    /// scenario's; `scripted` without a scenario; `None` with `team="both"`).
     #[getter]
-    fn opponent(&self) -> &str {
-        &self.opponent
+    fn opponent(&self) -> Option<&str> {
+        self.opponent.as_deref()
     }
 
     /// (matches, robots per match, observation length, actions).
@@ -320,6 +351,7 @@ fn finished_dict<'py>(
     dict.set_item("state_hash", format!("{:016x}", f.state_hash))?;
     if let Some(s) = f.scenario {
         let e = PyDict::new(py);
+        e.set_item("name", s.name)?;
         e.set_item("ending", s.ending)?;
         e.set_item("success", s.success)?;
         e.set_item("ticks", s.ticks)?;

@@ -11,7 +11,10 @@
 //! With a scenario (docs/SCENARIOS.md) every match starts from it, drawn
 //! from the match's seed, the controlled team (blue with both) as its own
 //! team, and ends when the scenario's play does: the match `naosoccer match
-//! --scenario FILE --own TEAM` plays.
+//! --scenario FILE --own TEAM` plays. With several, every match start (each
+//! reset's and each restart) first chooses one of them from its seed
+//! (`pick`), on a stream of its own: the chosen scenario's start is the
+//! one it draws alone, and a list of one plays as that scenario alone.
 //!
 //! A finished match is reported once ([`Finished`]) and replaced at once by
 //! the slot's next match: slot `i`'s `e`-th match (counting from the last
@@ -35,6 +38,8 @@ use naosoccer_proto::{
     Action, Event, MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
 use naosoccer_referee::{blank_observation, Judge, Match, MatchConfig, MatchError, Scenario};
+use rand::{RngCore, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 use crate::pool::Pool;
 
@@ -105,8 +110,10 @@ impl Controlled {
 pub struct EnvSpec {
     pub matches: usize,
     pub controlled: Controlled,
-    /// The other team's policy spec (ignored with [`Controlled::Both`]).
-    pub opponent: String,
+    /// The other team's policy spec (ignored with [`Controlled::Both`]);
+    /// `None`: the scenarios' `opponent` ([`VecMatches::opponent`]), and
+    /// `scripted` without scenarios.
+    pub opponent: Option<String>,
     pub config: MatchConfig,
     /// Observation layout version (1, 2 or 3).
     pub obs_version: u32,
@@ -115,17 +122,24 @@ pub struct EnvSpec {
     /// Threads stepping the matches, the caller's included (at least 1;
     /// no more than the matches are used).
     pub threads: usize,
-    /// Every match starts from this scenario (checked against `config`).
-    pub scenario: Option<Scenario>,
+    /// The scenarios matches start from, each checked against `config`:
+    /// every match start draws one from the match's seed (`pick`). One:
+    /// every match starts from it; none: from the kick-off.
+    pub scenarios: Vec<Scenario>,
+    /// The scenarios' chances, in proportion (finite, at least 0, not all
+    /// 0; one a scenario); `None`: equal.
+    pub scenario_weights: Option<Vec<f64>>,
     /// Whether a finished match is replaced by the slot's next one in the
     /// same step (the vector env) or stays finished until the next reset.
     pub restart: bool,
 }
 
-/// How a scenario's play ended: its end condition's name, whether that is
-/// a success, and the control ticks played from the start.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// How a scenario's play ended: the scenario's name, its end condition's
+/// name, whether that is a success, and the control ticks played from the
+/// start.
+#[derive(Debug, Clone, PartialEq)]
 pub struct ScenarioEnding {
+    pub name: String,
     pub ending: &'static str,
     pub success: bool,
     pub ticks: u64,
@@ -166,12 +180,35 @@ struct Setup {
     scale: ObsScale,
     decision: Option<DecisionConfig>,
     /// The built-in policy of the robots the caller does not drive (`None`:
-    /// a trained team, which the env's own thread runs for all slots).
+    /// a trained team, which the env's own thread runs for all slots, or
+    /// each scenario's own).
     builtin: Option<PolicyKind>,
-    /// The scenario and the colour of its own team.
-    scenario: Option<(Scenario, Team)>,
+    /// The scenarios a match may start from (none: the kick-off).
+    drills: Vec<Drill>,
+    /// The running sums of the scenarios' weights, the last their total.
+    cumulative: Vec<f64>,
+    /// The colour of the scenarios' own team.
+    own: Team,
     restart: bool,
 }
+
+/// A scenario of the list.
+struct Drill {
+    scenario: Scenario,
+    /// Its own opponents, when the scenarios name different built-in ones
+    /// and the caller named none.
+    opponent: Option<PolicyKind>,
+}
+
+/// What `opponent` reports when every match plays its own scenario's
+/// `opponent` (the scenarios name different built-in policies).
+pub const PER_SCENARIO: &str = "per scenario";
+
+/// The stream of the scenario choice: the match seed mixed with this seeds
+/// its generator, another stream than the scenario's own draws (the
+/// referee's), so the start a scenario draws is the same chosen from a list
+/// or played alone.
+const PICK_STREAM: u64 = 0xC401_CE5D_A11E_5EED;
 
 impl Setup {
     fn actions(&self) -> usize {
@@ -196,6 +233,8 @@ struct Slot {
     actions: [Action; ROBOTS],
     /// Matches this slot finished since the last reset.
     episode: u64,
+    /// The scenario the match started from (its index in the list).
+    drill: Option<usize>,
     /// With a scenario: the judge of this match's play, and the last
     /// tick's events it reads.
     judge: Option<Judge>,
@@ -236,8 +275,11 @@ impl SlotOut {
 pub struct VecMatches {
     setup: Arc<Setup>,
     /// The opponent as parsed; a trained team decides here, on the caller's
-    /// thread, for all slots at once.
+    /// thread, for all slots at once (with [`Controlled::Both`] or
+    /// opponents per scenario, an unused idle one).
     opponent: Side,
+    /// The opponents' spec as resolved ([`VecMatches::opponent`]).
+    opponent_spec: Option<String>,
     threads: usize,
     /// The slots and the threads that step them, from the first reset on.
     pool: Option<Pool<Slot>>,
@@ -265,24 +307,48 @@ impl VecMatches {
             )));
         }
         scale.version = spec.obs_version;
-        let opponent = match spec.controlled {
-            Controlled::Both => Side::Builtin(PolicyKind::Idle),
-            Controlled::Team(_) => Side::parse(&spec.opponent)?,
-        };
-        let scenario = match spec.scenario {
-            Some(s) => {
-                s.check(&spec.config).map_err(MatchError::from)?;
-                let own = match spec.controlled {
-                    Controlled::Team(t) => t,
-                    Controlled::Both => Team::Blue,
-                };
-                Some((s, own))
+        let cumulative = cumulative_weights(spec.scenarios.len(), spec.scenario_weights)?;
+        let many = spec.scenarios.len() > 1;
+        for (i, s) in spec.scenarios.iter().enumerate() {
+            if let Err(e) = s.check(&spec.config) {
+                return Err(match many {
+                    true => VecEnvError::Config(format!("scenario[{i}] ({}): {e}", s.name)),
+                    false => MatchError::from(e).into(),
+                });
             }
-            None => None,
+        }
+        // The trained team, if any, that decides for all slots; the spec
+        // reported; the built-in policy of every match, else of each
+        // scenario's.
+        let n = spec.scenarios.len();
+        let (opponent, opponent_spec, builtin, kinds) = match spec.controlled {
+            Controlled::Both => (Side::Builtin(PolicyKind::Idle), None, None, vec![None; n]),
+            Controlled::Team(_) => match resolve_opponent(spec.opponent, &spec.scenarios)? {
+                Some(o) => {
+                    let side = Side::parse(&o)?;
+                    let builtin = match &side {
+                        Side::Builtin(k) => Some(*k),
+                        Side::Learned(_) => None,
+                    };
+                    (side, Some(o), builtin, vec![None; n])
+                }
+                None => (
+                    Side::Builtin(PolicyKind::Idle),
+                    Some(PER_SCENARIO.to_owned()),
+                    None,
+                    scenario_opponents(&spec.scenarios)?,
+                ),
+            },
         };
-        let builtin = match &opponent {
-            Side::Builtin(k) => Some(*k),
-            Side::Learned(_) => None,
+        let drills = spec
+            .scenarios
+            .into_iter()
+            .zip(kinds)
+            .map(|(scenario, opponent)| Drill { scenario, opponent })
+            .collect();
+        let own = match spec.controlled {
+            Controlled::Team(t) => t,
+            Controlled::Both => Team::Blue,
         };
         Ok(VecMatches {
             setup: Arc::new(Setup {
@@ -292,10 +358,13 @@ impl VecMatches {
                 scale,
                 decision: spec.decision,
                 builtin,
-                scenario,
+                drills,
+                cumulative,
+                own,
                 restart: spec.restart,
             }),
             opponent,
+            opponent_spec,
             threads: spec.threads.max(1),
             pool: None,
             panicked: None,
@@ -305,6 +374,14 @@ impl VecMatches {
 
     pub fn num_matches(&self) -> usize {
         self.setup.matches
+    }
+
+    /// The opponents' policy spec as resolved: the caller's; else the one
+    /// every scenario names; else, the scenarios naming different built-in
+    /// policies, [`PER_SCENARIO`] (each match plays its own scenario's);
+    /// `scripted` without scenarios. `None` with [`Controlled::Both`].
+    pub fn opponent(&self) -> Option<&str> {
+        self.opponent_spec.as_deref()
     }
 
     /// Controlled robots per match.
@@ -482,6 +559,12 @@ impl VecMatches {
         self.slots().map(|s| s.m.seed()).collect()
     }
 
+    /// The scenario each slot's current match started from, as its index
+    /// in the list (`None` without scenarios).
+    pub fn scenario_indices(&self) -> Vec<Option<usize>> {
+        self.slots().map(|s| s.drill).collect()
+    }
+
     /// Each slot's current tick.
     pub fn ticks(&self) -> Vec<u64> {
         self.slots().map(|s| s.m.tick().get()).collect()
@@ -548,6 +631,121 @@ fn match_seed(setup: &Setup, slot: usize, reset_seed: u64, episode: u64) -> u64 
         .wrapping_add(episode.wrapping_mul(setup.matches as u64))
 }
 
+/// The running sums of the weights of `n` scenarios (`None`: 1 each),
+/// once they are checked.
+fn cumulative_weights(n: usize, weights: Option<Vec<f64>>) -> Result<Vec<f64>, VecEnvError> {
+    let bad = |m: String| Err(VecEnvError::Config(format!("scenario_weights: {m}")));
+    let weights = match weights {
+        None => vec![1.0; n],
+        Some(_) if n == 0 => return bad("given without a scenario".into()),
+        Some(w) if w.len() != n => {
+            return bad(format!(
+                "{} given for {n} scenarios: one weight a scenario",
+                w.len()
+            ))
+        }
+        Some(w) => w,
+    };
+    if let Some((i, w)) = weights
+        .iter()
+        .enumerate()
+        .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
+    {
+        return bad(format!(
+            "weight {i} is {w}: a weight is a finite number, 0 or more"
+        ));
+    }
+    let cumulative: Vec<f64> = weights
+        .iter()
+        .scan(0.0, |sum, w| {
+            *sum += w;
+            Some(*sum)
+        })
+        .collect();
+    if let Some(&total) = cumulative.last() {
+        if total == 0.0 {
+            return bad("all are 0: at least one must be positive".into());
+        }
+        if !total.is_finite() {
+            return bad("their sum is not a finite number".into());
+        }
+    }
+    Ok(cumulative)
+}
+
+/// The opponents' spec when every match plays the same: `opponent`; else
+/// the one every scenario names; else `scripted` without scenarios.
+/// `None`: the scenarios name different built-in policies, each match
+/// plays its own scenario's; a trained team among them is refused.
+fn resolve_opponent(
+    opponent: Option<String>,
+    scenarios: &[Scenario],
+) -> Result<Option<String>, VecEnvError> {
+    if let Some(o) = opponent {
+        return Ok(Some(o));
+    }
+    let Some(first) = scenarios.first() else {
+        return Ok(Some("scripted".to_owned()));
+    };
+    if scenarios.iter().all(|s| s.opponent == first.opponent) {
+        return Ok(Some(first.opponent.clone()));
+    }
+    if let Some((i, s)) = scenarios
+        .iter()
+        .enumerate()
+        .find(|(_, s)| !naosoccer_policy::is_builtin_spec(&s.opponent))
+    {
+        let named: Vec<&str> = scenarios.iter().map(|s| s.opponent.as_str()).collect();
+        return Err(VecEnvError::Config(format!(
+            "the scenarios name different opponents ({}) and scenario[{i}] ({}) names a \
+             trained team, {:?}, which plays every match or none: pass opponent= to name \
+             the policy every match's opponents play",
+            named.join(", "),
+            s.name,
+            s.opponent
+        )));
+    }
+    Ok(None)
+}
+
+/// Each scenario's own opponents, all built-in policies.
+fn scenario_opponents(scenarios: &[Scenario]) -> Result<Vec<Option<PolicyKind>>, VecEnvError> {
+    scenarios
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            s.opponent.parse::<PolicyKind>().map(Some).map_err(|e| {
+                VecEnvError::Config(format!("scenario[{i}] ({}): opponent: {e}", s.name))
+            })
+        })
+        .collect()
+}
+
+/// The scenario the match of `seed` starts from, as its index in the list:
+/// with two or more, scenario `i` with chance `weight[i] / sum`, from a
+/// uniform number in [0, 1) (the top 53 bits of the first 64-bit draw) of a
+/// ChaCha8 generator seeded by `seed ^ PICK_STREAM`. `None` without
+/// scenarios.
+fn pick(setup: &Setup, seed: u64) -> Option<usize> {
+    match setup.drills.len() {
+        0 => None,
+        1 => Some(0),
+        _ => {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ PICK_STREAM);
+            let u = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+            let total = *setup.cumulative.last()?;
+            let x = u * total;
+            // Rounding may carry `x` to the total: the last scenario with a
+            // weight then, never one of weight 0.
+            setup
+                .cumulative
+                .iter()
+                .position(|&c| x < c)
+                .or_else(|| setup.cumulative.iter().position(|&c| c >= total))
+        }
+    }
+}
+
 /// Slot `index`'s `episode`-th match after a reset with `reset_seed`, with
 /// no buffers for its rows yet.
 fn new_slot(
@@ -557,16 +755,21 @@ fn new_slot(
     episode: u64,
 ) -> Result<Slot, VecEnvError> {
     let seed = match_seed(setup, index, reset_seed, episode);
-    let (m, judge) = match &setup.scenario {
-        Some((s, own)) => {
-            let m = Match::with_scenario(&setup.cfg, seed, s, *own)?;
-            let judge = s.judge(&setup.cfg, *own, m.tick());
+    let drill = pick(setup, seed);
+    let (m, judge) = match drill {
+        Some(d) => {
+            let (s, own) = (&setup.drills[d].scenario, setup.own);
+            let m = Match::with_scenario(&setup.cfg, seed, s, own)?;
+            let judge = s.judge(&setup.cfg, own, m.tick());
             (m, Some(judge))
         }
         None => (Match::new(&setup.cfg, seed)?, None),
     };
+    let builtin = drill
+        .and_then(|d| setup.drills[d].opponent)
+        .or(setup.builtin);
     let policies = RobotId::all()
-        .map(|r| match setup.builtin {
+        .map(|r| match builtin {
             Some(k) if !setup.robots.contains(&r) => Some(k.build(seed, r)),
             _ => None,
         })
@@ -579,6 +782,7 @@ fn new_slot(
         policies,
         actions: [Action::Stay; ROBOTS],
         episode,
+        drill,
         judge,
         events: Vec::new(),
         ended: false,
@@ -657,7 +861,8 @@ fn step_slot(setup: &Setup, slot: &mut Slot) -> Result<(), VecEnvError> {
             stats: slot.m.stats(),
             state_hash: slot.m.state_hash(),
             obs: slot.out.obs.clone(),
-            scenario: ending.map(|e| ScenarioEnding {
+            scenario: ending.zip(slot.drill).map(|(e, d)| ScenarioEnding {
+                name: setup.drills[d].scenario.name.clone(),
                 ending: e.kind.name(),
                 success: e.success,
                 ticks: e.ticks,
@@ -687,12 +892,13 @@ mod tests {
         EnvSpec {
             matches,
             controlled: Controlled::Team(Team::Blue),
-            opponent: opponent.into(),
+            opponent: Some(opponent.into()),
             config,
             obs_version: 2,
             decision: None,
             threads: 2,
-            scenario: None,
+            scenarios: Vec::new(),
+            scenario_weights: None,
             restart: true,
         }
     }
@@ -799,7 +1005,7 @@ mod tests {
         let scenario = Scenario::from_toml(text, None).unwrap();
         let mut s = spec(2, "idle", 1.0);
         s.controlled = Controlled::Team(Team::Red);
-        s.scenario = Some(scenario.clone());
+        s.scenarios = vec![scenario.clone()];
         let cfg = s.config.clone();
         let mut env = VecMatches::new(s).unwrap();
         env.reset(9).unwrap();
@@ -823,6 +1029,7 @@ mod tests {
             assert_eq!(
                 f.scenario,
                 Some(ScenarioEnding {
+                    name: "scenario".into(),
                     ending: "goal_for",
                     success: true,
                     ticks: ending.ticks
@@ -833,9 +1040,256 @@ mod tests {
         assert_eq!(env.ticks(), vec![0, 0]);
         // A scenario that does not fit the configuration is refused.
         let mut bad = spec(1, "idle", 1.0);
-        bad.scenario = Some(Scenario::from_toml("[ball]\nx = 4.0\ny = 0\n", None).unwrap());
+        bad.scenarios = vec![Scenario::from_toml("[ball]\nx = 4.0\ny = 0\n", None).unwrap()];
         let e = VecMatches::new(bad).err().unwrap().to_string();
         assert!(e.contains("`ball.x`"), "{e}");
+    }
+
+    /// A short scenario (its play lasts half a second: 5 ticks) named
+    /// `name`, the ball `x` m from the centre, the opponents `opponent`.
+    fn drill(name: &str, x: f32, opponent: &str) -> Scenario {
+        let text = format!(
+            "name = \"{name}\"\nopponent = \"{opponent}\"\nduration = 0.5\n\
+             [ball]\nx = {x}\ny = [-0.5, 0.5]\n\
+             [[robot]]\nside = \"own\"\nplayer = 1\nx = 0\ny = [0.5, 1.5]\n"
+        );
+        Scenario::from_toml(&text, None).unwrap()
+    }
+
+    fn drills_spec(matches: usize, scenarios: Vec<Scenario>, weights: Option<Vec<f64>>) -> EnvSpec {
+        let mut s = spec(matches, "idle", 1.0);
+        s.scenarios = scenarios;
+        s.scenario_weights = weights;
+        s
+    }
+
+    /// The scenario a one-slot env's match of `seed` starts from.
+    fn drawn(scenarios: &[Scenario], weights: Option<Vec<f64>>, seed: u64) -> usize {
+        let mut env = VecMatches::new(drills_spec(1, scenarios.to_vec(), weights)).unwrap();
+        env.reset(seed).unwrap();
+        env.scenario_indices()[0].unwrap()
+    }
+
+    /// With a list every match start draws its scenario from its seed: the
+    /// same in any slot, at a reset or a restart, with any threads; both
+    /// are drawn; each start is the one the scenario draws alone; the
+    /// finished match names its scenario.
+    #[test]
+    fn a_list_draws_a_scenario_per_match_start() {
+        let list = vec![drill("near", 2.0, "idle"), drill("far", -2.0, "idle")];
+        let cfg = spec(1, "idle", 1.0).config;
+        // The start a match of `seed` made from scenario `d` alone.
+        let start = |seed, d: usize| {
+            Match::with_scenario(&cfg, seed, &list[d], Team::Blue)
+                .unwrap()
+                .state_hash()
+        };
+        let mut runs = Vec::new();
+        for threads in [1, 3] {
+            let mut s = drills_spec(3, list.clone(), None);
+            s.threads = threads;
+            let mut env = VecMatches::new(s).unwrap();
+            assert_eq!(env.opponent(), Some("idle"));
+            // (seed, scenario) of every match start, in order.
+            let mut starts = Vec::new();
+            for reset in [100u64, 200, 300, 400] {
+                env.reset(reset).unwrap();
+                let indices = env.scenario_indices();
+                for ((seed, hash), d) in
+                    env.seeds().into_iter().zip(env.state_hashes()).zip(indices)
+                {
+                    let d = d.unwrap();
+                    assert_eq!(d, drawn(&list, None, seed), "seed {seed}");
+                    assert_eq!(hash, start(seed, d), "seed {seed}");
+                    starts.push((seed, d));
+                }
+                let mut finished = 0;
+                for _ in 0..12 {
+                    let before = env.scenario_indices();
+                    let out = env.step(&[4; 12]).unwrap();
+                    for f in &out.finished {
+                        let ending = f.scenario.as_ref().unwrap();
+                        assert_eq!(ending.name, list[before[f.slot].unwrap()].name);
+                        assert_eq!(ending.ending, "time_up");
+                        finished += 1;
+                        // The restart drew again, from the slot's next seed.
+                        let seed = env.seeds()[f.slot];
+                        assert_eq!(seed, f.seed + 3);
+                        let d = env.scenario_indices()[f.slot].unwrap();
+                        assert_eq!(d, drawn(&list, None, seed), "restart, seed {seed}");
+                        assert_eq!(env.state_hashes()[f.slot], start(seed, d));
+                        starts.push((seed, d));
+                    }
+                }
+                assert_eq!(finished, 6, "every slot's first two matches ended");
+            }
+            for d in [0, 1] {
+                assert!(starts.iter().any(|s| s.1 == d), "{d} drawn: {starts:?}");
+            }
+            runs.push(starts);
+        }
+        assert_eq!(runs[0], runs[1], "the same with 1 and 3 threads");
+    }
+
+    /// A list of one plays as its scenario alone, bit for bit, whatever
+    /// its weight; so does a list whose other scenarios weigh 0.
+    #[test]
+    fn a_list_of_one_is_the_scenario_alone() {
+        let one = drill("one", 1.0, "scripted");
+        let other = drill("other", -1.0, "scripted");
+        let run = |scenarios: Vec<Scenario>, weights: Option<Vec<f64>>| {
+            let mut s = drills_spec(2, scenarios, weights);
+            s.opponent = None;
+            let mut env = VecMatches::new(s).unwrap();
+            assert_eq!(env.opponent(), Some("scripted"));
+            env.reset(5).unwrap();
+            let mut hashes = vec![env.state_hashes()];
+            for _ in 0..12 {
+                let out = env.step(&[0, 1, 3, 4, 4, 3, 1, 0]).unwrap();
+                hashes.push(env.state_hashes());
+                hashes.push(out.finished.iter().map(|f| f.state_hash).collect());
+            }
+            hashes
+        };
+        let alone = run(vec![one.clone()], None);
+        let cfg = spec(1, "idle", 1.0).config;
+        let start = |seed| {
+            Match::with_scenario(&cfg, seed, &one, Team::Blue)
+                .unwrap()
+                .state_hash()
+        };
+        assert_eq!(alone[0], vec![start(5), start(6)]);
+        assert_eq!(run(vec![one.clone()], Some(vec![3.5])), alone);
+        assert_eq!(
+            run(vec![one.clone(), other.clone()], Some(vec![1.0, 0.0])),
+            alone
+        );
+        assert_eq!(run(vec![other, one], Some(vec![0.0, 2.0])), alone);
+    }
+
+    /// The weights set the chances; a scenario of weight 0 is never drawn.
+    #[test]
+    fn weights_set_the_chances() {
+        let list = vec![
+            drill("a", 1.0, "idle"),
+            drill("b", 0.0, "idle"),
+            drill("c", -1.0, "idle"),
+        ];
+        let mut env = VecMatches::new(drills_spec(50, list, Some(vec![3.0, 0.0, 1.0]))).unwrap();
+        let mut counts = [0usize; 3];
+        for reset in 0..20 {
+            env.reset(reset * 1000).unwrap();
+            for d in env.scenario_indices() {
+                counts[d.unwrap()] += 1;
+            }
+        }
+        assert_eq!(counts[1], 0, "{counts:?}");
+        // 1000 draws of chance 3/4: 750 +- 14 (one standard deviation).
+        assert!((690..=810).contains(&counts[0]), "{counts:?}");
+    }
+
+    /// Bad weights, entries that do not fit and opponents that cannot be
+    /// told apart per match are refused, naming what is wrong.
+    #[test]
+    fn bad_lists_are_refused() {
+        let two = || vec![drill("a", 1.0, "idle"), drill("b", -1.0, "scripted")];
+        let error = |scenarios: Vec<Scenario>, weights: Option<Vec<f64>>| {
+            VecMatches::new(drills_spec(1, scenarios, weights))
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default()
+        };
+        for (weights, says) in [
+            (vec![1.0], "1 given for 2 scenarios"),
+            (vec![1.0, 2.0, 3.0], "3 given for 2 scenarios"),
+            (vec![1.0, -1.0], "weight 1 is -1"),
+            (vec![f64::NAN, 1.0], "weight 0 is NaN"),
+            (vec![f64::INFINITY, 1.0], "weight 0 is inf"),
+            (vec![0.0, 0.0], "all are 0"),
+            (vec![f64::MAX, f64::MAX], "sum is not a finite number"),
+        ] {
+            let e = error(two(), Some(weights));
+            assert!(
+                e.starts_with("scenario_weights: ") && e.contains(says),
+                "{e}"
+            );
+        }
+        let e = error(Vec::new(), Some(vec![1.0]));
+        assert_eq!(e, "scenario_weights: given without a scenario");
+        let far = Scenario::from_toml("name = \"far\"\n[ball]\nx = 4.0\ny = 0\n", None).unwrap();
+        let e = error(vec![drill("a", 1.0, "idle"), far], None);
+        assert!(
+            e.starts_with("scenario[1] (far): ") && e.contains("`ball.x`"),
+            "{e}"
+        );
+        // Different built-in opponents: each match plays its scenario's.
+        let mut s = drills_spec(1, two(), None);
+        s.opponent = None;
+        let env = VecMatches::new(s).unwrap();
+        assert_eq!(env.opponent(), Some(PER_SCENARIO));
+        // A trained team among them needs `opponent=`.
+        let mut s = drills_spec(
+            1,
+            vec![drill("a", 1.0, "idle"), drill("t", 0.0, "ppo:nowhere")],
+            None,
+        );
+        s.opponent = None;
+        let e = VecMatches::new(s).err().unwrap().to_string();
+        assert!(
+            e.contains("scenario[1] (t)") && e.contains("pass opponent="),
+            "{e}"
+        );
+        // Named, it plays every match; the scenarios' own are not read.
+        let mut s = drills_spec(
+            1,
+            vec![drill("a", 1.0, "idle"), drill("t", 0.0, "ppo:nowhere")],
+            None,
+        );
+        s.opponent = Some("random".into());
+        assert_eq!(VecMatches::new(s).unwrap().opponent(), Some("random"));
+        // Self-play has no opponents to choose.
+        let mut s = drills_spec(
+            1,
+            vec![drill("a", 1.0, "idle"), drill("t", 0.0, "ppo:nowhere")],
+            None,
+        );
+        s.opponent = None;
+        s.controlled = Controlled::Both;
+        assert_eq!(VecMatches::new(s).unwrap().opponent(), None);
+    }
+
+    /// With opponents per scenario each match plays its own scenario's: the
+    /// match of an env of that scenario alone, opponents and all.
+    #[test]
+    fn each_match_plays_its_scenarios_opponents() {
+        let list = vec![
+            drill("idle", 1.0, "idle"),
+            drill("scripted", 1.0, "scripted"),
+        ];
+        let mut s = drills_spec(6, list.clone(), None);
+        s.opponent = None;
+        let mut env = VecMatches::new(s).unwrap();
+        env.reset(64).unwrap();
+        for _ in 0..4 {
+            env.step(&[4; 24]).unwrap();
+        }
+        let indices = env.scenario_indices();
+        assert!(
+            indices.contains(&Some(0)) && indices.contains(&Some(1)),
+            "{indices:?}"
+        );
+        for (i, d) in indices.into_iter().enumerate() {
+            let d = d.unwrap();
+            let mut s = drills_spec(1, vec![list[d].clone()], None);
+            s.opponent = None;
+            let mut alone = VecMatches::new(s).unwrap();
+            assert_eq!(alone.opponent(), Some(list[d].opponent.as_str()));
+            alone.reset(64 + i as u64).unwrap();
+            for _ in 0..4 {
+                alone.step(&[4; 4]).unwrap();
+            }
+            assert_eq!(env.state_hashes()[i], alone.state_hashes()[0], "slot {i}");
+        }
     }
 
     #[test]
