@@ -103,34 +103,34 @@ pub struct TrainArgs {
     /// Team presets: let robots shoot with the ball out of reach.
     #[arg(long, hide = true)]
     no_shoot_mask: bool,
-    /// PPO team preset: give the robots a sixth action, `pass` (a kick
+    /// PPO or DQN team preset: give the robots a sixth action, `pass` (a kick
     /// toward the teammate the protocol's pass rule names; see
     /// docs/PROTOCOL.md), possible only with the ball in kick reach and a
     /// teammate to receive it.
     #[arg(long, hide = true)]
     pass_action: bool,
-    /// PPO team preset, with --pass-action: give the robots a seventh
+    /// PPO or DQN team preset, with --pass-action: give the robots a seventh
     /// action, `support`, a walk to the support spot 1.5 m ahead of the
     /// ball and 1 m to its side (where a pass can reach them), facing the
     /// ball once there. The team's policy turns it into `forward`, turns
     /// and `stay` each tick, so it needs nothing new on the wire.
     #[arg(long, hide = true, requires = "pass_action")]
     support_action: bool,
-    /// With --support-action: one `support` decision holds up to this many
-    /// ticks (10 ticks = 1 s at the default 10 Hz; a robot walks 0.2 m/s),
-    /// until the robot reaches its spot or the ball comes within 0.6 m of
-    /// it, instead of --persist ticks like any movement. Recorded in the
-    /// run's configuration, so the team plays the same way in `match`,
-    /// `eval` and over the socket. 0: off.
+    /// PPO or DQN team preset, with --support-action: one `support` decision
+    /// holds up to this many ticks (10 ticks = 1 s at the default 10 Hz; a
+    /// robot walks 0.2 m/s), until the robot reaches its spot or the ball comes
+    /// within 0.6 m of it, instead of --persist ticks like any movement.
+    /// Recorded in the run's configuration, so the team plays the same way in
+    /// `match`, `eval` and over the socket. 0: off.
     #[arg(long, hide = true, value_name = "TICKS", requires = "support_action")]
     support_hold: Option<u32>,
-    /// With --support-action: roles. Only the team's CHASERS (1 to 3)
-    /// standing robots nearest the ball (on a tie the lower player number
-    /// is nearer) may walk `forward` or turn; the others choose among
-    /// `support`, `stay` and, with the ball in reach, `shoot` and `pass`.
+    /// PPO or DQN team preset, with --support-action: roles. Only the team's
+    /// CHASERS (1 to 3) standing robots nearest the ball (on a tie the lower
+    /// player number is nearer) may walk `forward` or turn; the others choose
+    /// among `support`, `stay` and, with the ball in reach, `shoot` and `pass`.
     /// Read from each robot's own observation and recorded in the run's
-    /// configuration, so the team plays the same way in `match`, `eval`
-    /// and over the socket.
+    /// configuration, so the team plays the same way in `match`, `eval` and
+    /// over the socket.
     #[arg(long, hide = true, value_name = "CHASERS", requires = "support_action",
           value_parser = clap::value_parser!(u32).range(1..=3))]
     support_roles: Option<u32>,
@@ -139,37 +139,37 @@ pub struct TrainArgs {
     /// pass can reach them) unless the ball is in their reach.
     #[arg(long, hide = true, requires = "support_roles")]
     support_only: bool,
-    /// With --support-action: where the support spot is. `ahead` (the
-    /// default): 1.5 m ahead of the ball toward the opponent goal and 1 m
-    /// to the side the robot is on. `facing`: 1.5 m beyond the ball on the
-    /// line from the teammate nearest the ball through the ball, and 1 m to
-    /// the side of that line the robot is on, which is where that teammate
-    /// faces when it reaches the ball, whichever way it comes from.
+    /// PPO or DQN team preset, with --support-action: where the support spot
+    /// is. `ahead` (the default): 1.5 m ahead of the ball toward the opponent
+    /// goal and 1 m to the side the robot is on. `facing`: 1.5 m beyond the
+    /// ball on the line from the teammate nearest the ball through the ball,
+    /// and 1 m to the side of that line the robot is on, which is where that
+    /// teammate faces when it reaches the ball, whichever way it comes from.
     /// Recorded in the run's configuration. The reward's `support` shaping
     /// keeps its own spot (ahead); set it to 0 in the config when the spots
     /// differ.
     #[arg(long, hide = true, value_name = "SPOT", value_parser = ["ahead", "facing"],
           requires = "support_action")]
     support_spot: Option<String>,
-    /// With --support-action: give the robots an eighth action, `approach`,
-    /// a walk round behind the ball onto the line from it to the opponent
-    /// goal and then into the ball, so the robot reaches it facing that
-    /// goal (as the scripted team lines up). The team's policy turns it
-    /// into `forward` and turns each tick. With --support-roles only the
-    /// chasers may `approach`. Recorded in the run's configuration.
+    /// PPO or DQN team preset, with --support-action: give the robots an eighth
+    /// action, `approach`, a walk round behind the ball onto the line from it
+    /// to the opponent goal and then into the ball, so the robot reaches it
+    /// facing that goal (as the scripted team lines up). The team's policy
+    /// turns it into `forward` and turns each tick. With --support-roles only
+    /// the chasers may `approach`. Recorded in the run's configuration.
     #[arg(long, hide = true, requires = "support_action")]
     approach_action: bool,
     /// With --approach-action: no robot may walk `forward` or turn; they
     /// move by `approach` and `support` only (and `stay`, `shoot`, `pass`).
     #[arg(long, hide = true, requires = "approach_action")]
     approach_only: bool,
-    /// With --support-action: give the robots a ninth action, `defend`, a
-    /// walk back onto the line from the ball to the centre of the own goal,
-    /// 1 m from the ball (at least 0.3 m out from the goal), facing the ball
-    /// there: the step a team needs to stand between the ball and its goal.
-    /// Every robot may choose it, chaser or not; it holds like `support`
-    /// under --support-hold. Without --approach-action the network still
-    /// has `approach`'s output, always masked. Recorded in the run's
+    /// PPO or DQN team preset, with --support-action: give the robots a ninth
+    /// action, `defend`, a walk back onto the line from the ball to the centre
+    /// of the own goal, 1 m from the ball (at least 0.3 m out from the goal),
+    /// facing the ball there: the step a team needs to stand between the ball
+    /// and its goal. Every robot may choose it, chaser or not; it holds like
+    /// `support` under --support-hold. Without --approach-action the network
+    /// still has `approach`'s output, always masked. Recorded in the run's
     /// configuration.
     #[arg(long, hide = true, requires = "support_action")]
     defend_action: bool,

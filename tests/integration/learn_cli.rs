@@ -433,7 +433,8 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
 
 /// `train --pass-action --init-from`: a shipped team (five actions) seeds a
 /// run with the sixth action, `pass`; the run records both, trains, and
-/// plays; DQN and non-team presets refuse the flags by name.
+/// plays; DQN's team preset trains and plays with the actions too; the
+/// non-team presets refuse the flags by name.
 #[cfg(feature = "train")]
 #[test]
 fn pass_action_runs_start_from_a_shipped_team_and_play() {
@@ -474,9 +475,47 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
         String::from_utf8_lossy(&out.stderr)
     );
 
+    // DQN's team preset takes the actions too (issue 40): it trains and
+    // its team plays them.
+    let dqn = dir("cli_pass_action_dqn");
+    let dqn_s = dqn.to_str().unwrap();
+    let mut a = args("dqn", "team");
+    a.extend(["--support-action", "--defend-action", "--out", dqn_s]);
+    let out = naosoccer(&a);
+    assert!(
+        out.status.success(),
+        "dqn train failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dqn.join("config.json")).unwrap()).unwrap();
+    let decision = &config["dqn"]["decision"];
+    for flag in ["pass", "support", "defend"] {
+        assert_eq!(decision[flag], true, "{flag}: {decision}");
+    }
+    let out = naosoccer(&[
+        "eval",
+        "--blue",
+        &format!("dqn:{dqn_s}"),
+        "--red",
+        "scripted",
+        "--matches",
+        "1",
+        "--minutes",
+        "0.2",
+    ]);
+    assert!(
+        out.status.success(),
+        "dqn eval failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
     let other = dir("cli_pass_action_refused");
     let other_s = other.to_str().unwrap();
-    for (algo, preset, says) in [("dqn", "team", "PPO"), ("ppo", "cleanrl", "team preset")] {
+    for (algo, preset, says) in [
+        ("dqn", "paper", "team preset"),
+        ("ppo", "cleanrl", "team preset"),
+    ] {
         let mut a = args(algo, preset);
         a.extend(["--out", other_s]);
         let out = naosoccer(&a);

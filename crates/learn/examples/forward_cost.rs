@@ -117,7 +117,12 @@ fn main() {
                 };
                 let nets: Vec<QNet> = (0..k)
                     .map(|i| {
-                        let mut q = QNet::with_input(dim, &cfg.dqn.hidden, &format!("q{i}"));
+                        let mut q = QNet::with_input(
+                            dim,
+                            &cfg.dqn.hidden,
+                            cfg.dqn.actions(),
+                            &format!("q{i}"),
+                        );
                         q.vs.load(&file).unwrap();
                         q
                     })

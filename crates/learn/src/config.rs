@@ -147,6 +147,17 @@ impl TrainConfig {
     }
 }
 
+impl TrainConfig {
+    /// The decision-level MDP of the run's algorithm (`None`: every robot
+    /// decides every tick).
+    pub fn decision(&self) -> Option<DecisionConfig> {
+        match self.algo {
+            Algo::Ppo => self.ppo.decision,
+            Algo::Dqn => self.dqn.decision,
+        }
+    }
+}
+
 /// The observation encoding of a run: its scale under its layout version.
 pub fn run_scale(cfg: &TrainConfig) -> ObsScale {
     let mut s = cfg.obs_scale;
@@ -317,7 +328,7 @@ impl PpoConfig {
     }
 
     /// How many actions the actor chooses among: 5, 6 with `pass`, 7 with
-    /// `support` too.
+    /// `support` too ([`DecisionConfig::actions`]).
     pub fn actions(&self) -> usize {
         action_count(self.decision)
     }
@@ -458,6 +469,13 @@ impl DqnConfig {
             max_grad_norm: 10.0,
             decision: Some(DecisionConfig::team()),
         }
+    }
+
+    /// How many actions the Q-network values: 5 (the paper's, and the
+    /// `team` preset's by default), up to 9 with the decision settings'
+    /// extra actions ([`DecisionConfig::actions`]).
+    pub fn actions(&self) -> usize {
+        action_count(self.decision)
     }
 
     /// The exploration rate after `transitions` robot transitions.

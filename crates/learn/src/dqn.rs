@@ -19,6 +19,13 @@
 //! steps: `R = r_0 + g_0 r_1 + g_0 g_1 r_2 + ...`, bootstrapped with
 //! `g_0 g_1 ... g_{n-1} Q(s_n, .)`, and with nothing once the episode ended.
 //!
+//! Under the decision-level MDP the network has one output per action of
+//! the run's [`naosoccer_policy::DecisionConfig`] (the paper's five, up to
+//! nine with `pass`, `support`, `approach` and `defend`, as PPO's `team`
+//! actor), and both acting and the target keep to the actions allowed in
+//! the state: not banned ([`naosoccer_policy::actions::banned_actions`])
+//! and `shoot` only in reach ([`allowed_actions`]).
+//!
 //! Read top to bottom: the loop of the decision-level MDP ([`train`]),
 //! acting ([`epsilon_greedy`] over [`Dqn::q_values`]), storing
 //! ([`Dqn::remember`], into [`crate::replay`]) and the update ([`Dqn::learn`],
@@ -42,7 +49,9 @@ use crate::obs::OBS_DIM;
 use crate::replay::{NStep, Replay};
 use crate::run::{make_env, Run, TrainSummary};
 use crate::LearnError;
-use naosoccer_policy::actions::{NetAction, ACTIONS};
+use naosoccer_policy::actions::{
+    all_actions, allowed_actions, argmax_allowed, nth_allowed, ActionSet,
+};
 
 pub use crate::replay::MASKED_Q;
 
@@ -71,7 +80,8 @@ pub fn train(
     let mut run = Run::start(cfg, out, &mut env, &dqn.stores(), false, progress)?;
     let rows = env.rows();
     let mut dec = Decisions::<()>::new(&env, decision, scale, 0, cfg.dqn.discount(1));
-    let (mut q, mut chosen) = (Vec::new(), Vec::new());
+    let (mut q, mut chosen, mut allowed) = (Vec::new(), Vec::new(), Vec::new());
+    let k = dqn.actions;
     let mut nstep = NStep::new(cfg.dqn.n_step, rows);
     let mut loss = LossMean::default();
     let mut step = 0usize;
@@ -83,20 +93,25 @@ pub fn train(
             dqn.q_values(obs, robots, &mut q);
             let epsilon = cfg.dqn.epsilon_at(run.transitions());
             chosen.clear();
-            for (&r, &ok) in asked.rows.iter().zip(&asked.shoot_ok) {
-                let q = &q[r * ACTIONS..(r + 1) * ACTIONS];
-                chosen.push(epsilon_greedy(q, ok, epsilon, &mut rng));
+            allowed.clear();
+            let masks = asked.shoot_ok.iter().zip(&asked.banned);
+            for (&r, (&ok, &bans)) in asked.rows.iter().zip(masks) {
+                let may = allowed_actions(ok, bans, k);
+                allowed.push(may);
+                let q = &q[r * k..(r + 1) * k];
+                chosen.push(epsilon_greedy(q, may, epsilon, &mut rng));
             }
             let none = vec![(); chosen.len()];
             dec.decide(&env, &chosen, &none, &mut |c| {
-                // The decision that ran until now ends in this state.
-                let End::Decided { shoot_ok, .. } = c.end else {
+                // The decision that ran until now ends in this state, where
+                // the robot may choose `allowed[next]`.
+                let End::Decided { next: j, .. } = c.end else {
                     unreachable!("a decision closes here only by the next one")
                 };
                 let (r, next) = (c.row, &obs[c.row * OBS_DIM..(c.row + 1) * OBS_DIM]);
                 nstep.push(r, c.obs, c.action, c.reward, c.discount, false, &mut |t| {
-                    let k = r % robots;
-                    dqn.remember(k, t.obs, t.action, t.ret, next, t.discount, shoot_ok)
+                    let slot = r % robots;
+                    dqn.remember(slot, t.obs, t.action, t.ret, next, t.discount, allowed[j])
                 });
             });
         }
@@ -105,7 +120,15 @@ pub fn train(
             // Terminal: the next observation is never bootstrapped from.
             let r = c.row;
             nstep.push(r, c.obs, c.action, c.reward, c.discount, true, &mut |t| {
-                dqn.remember(r % robots, t.obs, t.action, t.ret, c.obs, t.discount, true)
+                dqn.remember(
+                    r % robots,
+                    t.obs,
+                    t.action,
+                    t.ret,
+                    c.obs,
+                    t.discount,
+                    all_actions(k),
+                )
             });
         });
         run.observe(env.rewards(), finished);
@@ -153,7 +176,7 @@ impl LossMean {
 }
 
 /// The paper's TD target `r + gamma max_a' Q_target(s', a') (1 - done)`;
-/// `q_next_target` is `[n, ACTIONS]`.
+/// `q_next_target` is `[n, actions]`.
 pub fn td_target(rewards: &Tensor, q_next_target: &Tensor, dones: &Tensor, gamma: f64) -> Tensor {
     let max_next = q_next_target.max_dim(1, false).0;
     rewards + gamma * max_next * (1.0 - dones)
@@ -165,9 +188,11 @@ pub fn td_target(rewards: &Tensor, q_next_target: &Tensor, dones: &Tensor, gamma
 /// and `a*` is the target network's best action, or with `q_next_online`
 /// (Double DQN) the online network's.
 ///
-/// `next_mask` (`[n, ACTIONS]`, added to both networks' values) rules out
-/// actions impossible in `s'`: [`MASKED_Q`] on `shoot` while the ball is out
-/// of reach, 0 elsewhere.
+/// `next_mask` (`[n, actions]`, added to both networks' values) rules out
+/// the actions not allowed in `s'` ([`allowed_actions`]: `shoot` while the
+/// ball is out of reach, what the decision settings ban there): [`MASKED_Q`]
+/// on them, 0 elsewhere; the max (or the online argmax) is over the allowed
+/// actions only.
 pub fn td_target_discounted(
     returns: &Tensor,
     discounts: &Tensor,
@@ -199,6 +224,9 @@ pub struct Dqn {
     opts: Vec<nn::Optimizer>,
     replays: Vec<Replay>,
     grad_steps: Vec<usize>,
+    /// Q-values per row: the decision settings' action count
+    /// ([`DqnConfig::actions`]).
+    pub actions: usize,
     /// Scratch rows and Q-values of forward passes.
     pub(crate) rows: Vec<f32>,
     pub(crate) q: Vec<f32>,
@@ -209,20 +237,22 @@ impl Dqn {
     /// shared); `input`: the observation layout's length.
     pub fn new(cfg: DqnConfig, robots: usize, input: usize) -> Result<Dqn, LearnError> {
         let n = if cfg.shared { 1 } else { robots };
+        let actions = cfg.actions();
         let mut nets = Vec::with_capacity(n);
         let mut targets = Vec::with_capacity(n);
         let mut opts = Vec::with_capacity(n);
         for i in 0..n {
-            let net = QNet::with_input(input, &cfg.hidden, &format!("q{i}"));
-            let mut target = QNet::with_input(input, &cfg.hidden, &format!("q{i}"));
+            let net = QNet::with_input(input, &cfg.hidden, actions, &format!("q{i}"));
+            let mut target = QNet::with_input(input, &cfg.hidden, actions, &format!("q{i}"));
             target.vs.copy(&net.vs)?;
             opts.push(nn::Adam::default().build(&net.vs, cfg.lr)?);
             nets.push(net);
             targets.push(target);
         }
         Ok(Dqn {
-            replays: (0..n).map(|_| Replay::new(cfg.replay)).collect(),
+            replays: (0..n).map(|_| Replay::new(cfg.replay, actions)).collect(),
             grad_steps: vec![0; n],
+            actions,
             cfg,
             nets,
             targets,
@@ -246,8 +276,9 @@ impl Dqn {
         self.nets.iter().map(|n| &n.vs).collect()
     }
 
-    /// Stores one (n-step) transition of learning robot slot `k`; see
-    /// [`Replay::push`].
+    /// Stores one (n-step) transition of learning robot slot `k`, with the
+    /// actions allowed in `next_obs` (all of them, [`all_actions`], without
+    /// masks); see [`Replay::push`].
     #[allow(clippy::too_many_arguments)]
     pub fn remember(
         &mut self,
@@ -257,17 +288,19 @@ impl Dqn {
         reward: f32,
         next_obs: &[f32],
         discount: f32,
-        next_shoot_ok: bool,
+        next_allowed: ActionSet,
     ) {
         let i = self.net_of(k);
-        self.replays[i].push(obs, action, reward, next_obs, discount, next_shoot_ok);
+        self.replays[i].push(obs, action, reward, next_obs, discount, next_allowed);
     }
 
-    /// The greedy Q-values of every row (`[n, ACTIONS]` into `q`); row `i`
+    /// The greedy Q-values of every row (`[n, actions]` into `q`); row `i`
     /// is learning robot `i % robots`.
     pub fn q_values(&mut self, obs: &[f32], robots: usize, q: &mut Vec<f32>) {
         let n = obs.len() / OBS_DIM;
-        q.resize(n * ACTIONS, 0.0);
+        // `w` Q-values a row (`k` below is a network's index).
+        let w = self.actions;
+        q.resize(n * w, 0.0);
         for (k, net) in self.nets.iter().enumerate() {
             let mine: Vec<usize> = if self.cfg.shared || self.nets.len() == 1 {
                 (0..n).collect()
@@ -285,11 +318,10 @@ impl Dqn {
             let m = mine.len();
             let x = Tensor::from_slice(&self.rows).view([m as i64, OBS_DIM as i64]);
             let y = tch::no_grad(|| net.q(&x));
-            self.q.resize(m * ACTIONS, 0.0);
-            y.copy_data(&mut self.q, m * ACTIONS);
+            self.q.resize(m * w, 0.0);
+            y.copy_data(&mut self.q, m * w);
             for (j, &i) in mine.iter().enumerate() {
-                q[i * ACTIONS..(i + 1) * ACTIONS]
-                    .copy_from_slice(&self.q[j * ACTIONS..(j + 1) * ACTIONS]);
+                q[i * w..(i + 1) * w].copy_from_slice(&self.q[j * w..(j + 1) * w]);
             }
             if self.cfg.shared || self.nets.len() == 1 {
                 break;
@@ -345,26 +377,25 @@ impl Dqn {
     }
 }
 
-/// An epsilon-greedy choice from one row of Q-values: with probability
-/// `epsilon` a uniformly random allowed action, else the best allowed one
-/// (`shoot` is allowed when `shoot_ok`).
-pub fn epsilon_greedy(q: &[f32], shoot_ok: bool, epsilon: f64, rng: &mut ChaCha8Rng) -> usize {
+/// An epsilon-greedy choice from one row of Q-values (one per action):
+/// with probability `epsilon` a uniformly random action of `allowed`
+/// ([`allowed_actions`]), else the allowed one of the largest value (the
+/// first on ties). With nothing allowed, any action.
+///
+/// The random draw is one `random_range(0..count)` over the allowed
+/// actions in index order, so a five-action team whose only mask is
+/// `shoot`'s draws as it always did (the draw skipping a masked `shoot`).
+pub fn epsilon_greedy(q: &[f32], allowed: ActionSet, epsilon: f64, rng: &mut ChaCha8Rng) -> usize {
+    let all = all_actions(q.len());
+    let allowed = match allowed & all {
+        0 => all,
+        a => a,
+    };
     if rng.random::<f64>() < epsilon {
-        let a = rng.random_range(0..ACTIONS - usize::from(!shoot_ok));
-        // Without shoot, the draw skips its index.
-        return if !shoot_ok && a >= NetAction::Shoot.index() {
-            a + 1
-        } else {
-            a
-        };
+        let k = rng.random_range(0..allowed.count_ones() as usize);
+        return nth_allowed(allowed, k);
     }
-    let mut best = 0; // forward: never the masked shoot
-    for (i, &x) in q.iter().enumerate() {
-        if (i != NetAction::Shoot.index() || shoot_ok) && x > q[best] {
-            best = i;
-        }
-    }
-    best
+    argmax_allowed(q, allowed)
 }
 
 pub use naosoccer_policy::actions::argmax;

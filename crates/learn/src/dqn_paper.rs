@@ -17,7 +17,7 @@ use crate::obs::OBS_DIM;
 use crate::replay::NStep;
 use crate::run::{make_env, Run, TrainSummary};
 use crate::LearnError;
-use naosoccer_policy::actions::ACTIONS;
+use naosoccer_policy::actions::{all_actions, ACTIONS};
 
 impl Dqn {
     /// Epsilon-greedy actions for `n` robots; row `i` belongs to learning
@@ -131,7 +131,7 @@ pub fn train(
                     t.ret,
                     next_obs,
                     t.discount,
-                    true,
+                    all_actions(ACTIONS),
                 )
             });
         }

@@ -8,7 +8,6 @@ use tch::Tensor;
 
 use crate::config::{PpoConfig, Preset};
 use crate::obs::{ObsScale, OBS_DIM};
-use naosoccer_policy::actions::ACTIONS;
 
 pub use naosoccer_policy::Activation;
 
@@ -163,8 +162,10 @@ pub fn rows_tensor(rows: &[f32], n: usize, width: usize, dim: usize) -> Tensor {
     }
 }
 
-/// A Q-network: `input -> hidden -> ACTIONS`, where `input` is the length
-/// of its observation layout.
+/// A Q-network: `input -> hidden -> actions`, where `input` is the length
+/// of its observation layout and `actions` the run's action count
+/// ([`crate::config::DqnConfig::actions`]: the paper's five unless the decision
+/// settings add actions).
 pub struct QNet {
     pub vs: nn::VarStore,
     mlp: Mlp,
@@ -173,16 +174,16 @@ pub struct QNet {
 
 impl QNet {
     /// A network reading the first `input` features of each row (its
-    /// observation layout's length). `name` prefixes the variables
-    /// (`q0.l0.weight`, ...), so several networks can share one checkpoint
-    /// file.
-    pub fn with_input(input: usize, hidden: &[usize], name: &str) -> QNet {
+    /// observation layout's length), with one Q-value per action of
+    /// `actions`. `name` prefixes the variables (`q0.l0.weight`, ...), so
+    /// several networks can share one checkpoint file.
+    pub fn with_input(input: usize, hidden: &[usize], actions: usize, name: &str) -> QNet {
         let vs = nn::VarStore::new(tch::Device::Cpu);
         let mlp = Mlp::new(
             &(vs.root() / name),
             input,
             hidden,
-            ACTIONS,
+            actions,
             Activation::Relu,
             InitScheme::Default,
         );

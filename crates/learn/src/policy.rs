@@ -73,7 +73,10 @@ pub fn untrained(cfg: &TrainConfig, name: String) -> Result<LearnedPolicy, Learn
                 cfg.learners.len()
             };
             let nets: Vec<QNet> = (0..n)
-                .map(|i| QNet::with_input(scale.dim(), &cfg.dqn.hidden, &format!("q{i}")))
+                .map(|i| {
+                    let (hidden, actions) = (&cfg.dqn.hidden, cfg.dqn.actions());
+                    QNet::with_input(scale.dim(), hidden, actions, &format!("q{i}"))
+                })
                 .collect();
             let stores: Vec<&VarStore> = nets.iter().map(|n| &n.vs).collect();
             from_stores(cfg, &stores, name)

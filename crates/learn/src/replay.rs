@@ -3,14 +3,15 @@
 //! ([`Replay`]), as cleanrl's `dqn.py` takes its buffer from a library.
 //! Every transition carries its own bootstrap discount (`gamma^dt` for a
 //! decision that lasted `dt` ticks, a product over an n-step return's
-//! steps, 0 once the episode ended).
+//! steps, 0 once the episode ended) and the actions allowed in its next
+//! state, the only ones its target bootstraps over.
 
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use tch::Tensor;
 
 use crate::obs::OBS_DIM;
-use naosoccer_policy::actions::{NetAction, ACTIONS};
+use naosoccer_policy::actions::{all_actions, ActionSet};
 
 /// What a masked action's Q-value becomes: never the largest, and (times a
 /// discount of 0 at an episode's end) still finite.
@@ -122,6 +123,8 @@ impl NStepRow {
 /// A ring buffer of transitions.
 pub struct Replay {
     cap: usize,
+    /// Q-values per row (the network's actions).
+    width: usize,
     len: usize,
     next: usize,
     obs: Vec<f32>,
@@ -131,15 +134,18 @@ pub struct Replay {
     rewards: Vec<f32>,
     /// Bootstrap discounts: `gamma^dt` (products for n-step), 0 at episode end.
     discounts: Vec<f32>,
-    /// Whether `shoot` is possible in `next_obs` (always, without a mask).
-    next_ok: Vec<bool>,
+    /// The actions allowed in `next_obs`
+    /// ([`naosoccer_policy::actions::allowed_actions`]; all without masks).
+    next_allowed: Vec<ActionSet>,
     scratch: Scratch,
 }
 
 impl Replay {
-    pub fn new(cap: usize) -> Replay {
+    /// Room for `cap` transitions of a network with `actions` Q-values.
+    pub fn new(cap: usize, actions: usize) -> Replay {
         Replay {
             cap,
+            width: actions,
             len: 0,
             next: 0,
             obs: vec![0.0; cap * OBS_DIM],
@@ -147,7 +153,7 @@ impl Replay {
             actions: vec![0; cap],
             rewards: vec![0.0; cap],
             discounts: vec![0.0; cap],
-            next_ok: vec![true; cap],
+            next_allowed: vec![all_actions(actions); cap],
             scratch: Scratch::default(),
         }
     }
@@ -160,8 +166,9 @@ impl Replay {
         self.len == 0
     }
 
-    /// One transition: `reward` is its (n-step) return and `discount` what
-    /// multiplies `Q(next_obs, .)` in its target (0 when the episode ended).
+    /// One transition: `reward` is its (n-step) return, `discount` what
+    /// multiplies `Q(next_obs, .)` in its target (0 when the episode ended)
+    /// and `next_allowed` the actions that target may take in `next_obs`.
     pub fn push(
         &mut self,
         obs: &[f32],
@@ -169,7 +176,7 @@ impl Replay {
         reward: f32,
         next_obs: &[f32],
         discount: f32,
-        next_shoot_ok: bool,
+        next_allowed: ActionSet,
     ) {
         let i = self.next;
         self.obs[i * OBS_DIM..(i + 1) * OBS_DIM].copy_from_slice(obs);
@@ -177,13 +184,14 @@ impl Replay {
         self.actions[i] = action as i64;
         self.rewards[i] = reward;
         self.discounts[i] = discount;
-        self.next_ok[i] = next_shoot_ok;
+        self.next_allowed[i] = next_allowed;
         self.next = (i + 1) % self.cap;
         self.len = (self.len + 1).min(self.cap);
     }
 
     /// A uniform minibatch: (obs, actions, returns, next_obs, discounts,
-    /// the additive mask of `next_obs`'s actions).
+    /// the additive mask of `next_obs`'s actions: [`MASKED_Q`] on those not
+    /// allowed, 0 elsewhere).
     pub(crate) fn sample(
         &mut self,
         batch: usize,
@@ -203,9 +211,11 @@ impl Replay {
             scratch.rewards.push(self.rewards[i]);
             scratch.discounts.push(self.discounts[i]);
             let row = scratch.mask.len();
-            scratch.mask.resize(row + ACTIONS, 0.0);
-            if !self.next_ok[i] {
-                scratch.mask[row + NetAction::Shoot.index()] = MASKED_Q;
+            scratch.mask.resize(row + self.width, 0.0);
+            for (a, m) in scratch.mask[row..].iter_mut().enumerate() {
+                if self.next_allowed[i] & (1 << a) == 0 {
+                    *m = MASKED_Q;
+                }
             }
         }
         let shape = [batch as i64, OBS_DIM as i64];
@@ -215,7 +225,7 @@ impl Replay {
             Tensor::from_slice(&scratch.rewards),
             Tensor::from_slice(&scratch.next_obs).view(shape),
             Tensor::from_slice(&scratch.discounts),
-            Tensor::from_slice(&scratch.mask).view([batch as i64, ACTIONS as i64]),
+            Tensor::from_slice(&scratch.mask).view([batch as i64, self.width as i64]),
         )
     }
 }
@@ -248,10 +258,10 @@ mod tests {
 
     #[test]
     fn replay_overwrites_the_oldest_transition() {
-        let mut r = Replay::new(2);
+        let mut r = Replay::new(2, 5);
         let o = [0.0; OBS_DIM];
         for a in 0..3 {
-            r.push(&o, a, a as f32, &o, 0.99, true);
+            r.push(&o, a, a as f32, &o, 0.99, all_actions(5));
         }
         assert_eq!(r.len(), 2);
         assert_eq!(r.actions, vec![2, 1]);

@@ -357,6 +357,121 @@ fn dqn_team_preset_trains_repeatably_and_plays_its_decision_mdp() {
     assert!(p.decision().is_some_and(|d| d.mask_shoot));
 }
 
+/// Issue 40: DQN's team preset with the whole action set (`pass`, a held
+/// `support` to the `facing` spot with roles, `defend`, so `approach`'s
+/// output is there and always masked) trains end to end, its network
+/// nine wide, and its saved team plays as it trained: every robot free to
+/// decide chooses, greedy or epsilon-greedy, only the actions allowed it
+/// (not banned, `shoot` only in reach), and the random draws reach every
+/// action allowed often enough.
+#[test]
+fn dqn_team_preset_trains_and_plays_with_more_actions() {
+    use naosoccer_learn::ActMode;
+    use naosoccer_policy::actions::{allowed_actions, banned_actions, is_free, NetAction};
+    use naosoccer_policy::SupportSpot;
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let mut cfg = tiny_config(Algo::Dqn, 5);
+    cfg.learners = vec![0, 1, 2, 3];
+    cfg.dqn = naosoccer_learn::config::DqnConfig::team();
+    let d = cfg.dqn.decision.as_mut().unwrap();
+    d.pass = true;
+    d.support = true;
+    d.support_hold = 40;
+    d.chasers = 2;
+    d.support_spot = SupportSpot::Facing;
+    d.defend = true;
+    assert_eq!(cfg.dqn.actions(), 9);
+    let (dir, metrics) = short_run(cfg.clone(), "dqn_team_actions");
+    assert!(metrics.lines().count() > 2, "{metrics}");
+    let spec = format!("dqn:{}", dir.display());
+    let mut p = LearnedPolicy::load(&spec).unwrap();
+    assert_eq!(p.decision(), cfg.dqn.decision);
+    assert_eq!(p.actions(), 9);
+    let d = p.decision().unwrap();
+    let reach = p.scale().kick;
+    let mut obs: Vec<_> = recorded_observations(2)
+        .into_iter()
+        .filter(is_free)
+        .collect();
+    // Recorded play hardly offers a pass: the robots with the ball in
+    // reach get a teammate 2 m ahead of it and the opponents behind it.
+    let passing: Vec<_> = obs
+        .iter()
+        .filter(|o| reach.in_reach(o))
+        .map(|o| {
+            let mut o = o.clone();
+            let me = o.player.index();
+            let (c, s, bx, by) = (
+                o.own[me].heading.cos(),
+                o.own[me].heading.sin(),
+                o.ball.x,
+                o.ball.y,
+            );
+            let mate = &mut o.own[(me + 1) % 4];
+            (mate.x, mate.y, mate.fallen) = (bx + 2.0 * c, by + 2.0 * s, false);
+            for r in o.opponents.iter_mut() {
+                (r.x, r.y) = (bx - 3.0 * c, by - 3.0 * s);
+            }
+            o
+        })
+        .collect();
+    obs.extend(passing);
+    let allowed: Vec<u16> = obs
+        .iter()
+        .map(|o| {
+            let in_reach = reach.in_reach(o);
+            allowed_actions(in_reach, banned_actions(o, in_reach, &d), 9)
+        })
+        .collect();
+    // One match seed per observation and pass: each is a fresh decision
+    // (a robot of a match already seen would hold its last one).
+    let play = |p: &mut LearnedPolicy, pass: u64| {
+        let mut chosen = vec![0usize; obs.len()];
+        for (i, o) in obs.iter().enumerate() {
+            let seed = pass * obs.len() as u64 + i as u64;
+            p.act_matches(&[(seed, std::slice::from_ref(o))], &mut chosen[i..=i]);
+        }
+        chosen
+    };
+    let greedy = play(&mut p, 0);
+    p.set_mode(ActMode::EpsilonGreedy { epsilon: 1.0 });
+    let random = play(&mut p, 1);
+    let mut drawn = [0usize; 9];
+    let mut could = [0usize; 9];
+    for i in 0..obs.len() {
+        for (mode, a) in [("greedy", greedy[i]), ("random", random[i])] {
+            assert!(
+                allowed[i] & (1 << a) != 0,
+                "{mode}: {} chosen, allowed {:09b}",
+                NetAction::ALL[a].name(),
+                allowed[i]
+            );
+        }
+        drawn[random[i]] += 1;
+        for (a, c) in could.iter_mut().enumerate() {
+            *c += usize::from(allowed[i] & (1 << a) != 0);
+        }
+    }
+    eprintln!("allowed in {could:?} rows, drawn {drawn:?} times");
+    assert_eq!(could[NetAction::Approach.index()], 0, "{could:?}");
+    for a in 0..9 {
+        if could[a] >= 50 {
+            assert!(drawn[a] > 0, "{a} never drawn: {drawn:?} of {could:?}");
+        }
+    }
+    // The masks this test is about bite (shoot and pass out of reach,
+    // forward for the robots that do not chase) and `defend` is never masked.
+    let n = obs.len();
+    for a in [NetAction::Shoot, NetAction::Pass, NetAction::Forward] {
+        assert!(
+            (1..n).contains(&could[a.index()]),
+            "{a:?}: {could:?} of {n}"
+        );
+    }
+    assert_eq!(could[NetAction::Defend.index()], n);
+}
+
 /// The `team` preset (Double DQN, 3-step returns, epsilon schedule, shared
 /// network, decision-level MDP) on the same tiny task and budget, its
 /// schedule and warm-up scaled to the budget.
@@ -1024,7 +1139,8 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
             };
             (0..k)
                 .map(|i| {
-                    let mut q = QNet::with_input(dim, &cfg.dqn.hidden, &format!("q{i}"));
+                    let mut q =
+                        QNet::with_input(dim, &cfg.dqn.hidden, cfg.dqn.actions(), &format!("q{i}"));
                     q.vs.load(&weights).unwrap();
                     q
                 })
@@ -1531,7 +1647,8 @@ fn init_from_widens_the_actor_for_the_defend_action() {
 
 /// The trainer itself (not only the CLI) refuses decision settings that
 /// lack what they build on: `approach` or a support spot without
-/// `support`, `approach_only` without `approach`, roles without `support`.
+/// `support`, `approach_only` without `approach`, roles without `support`;
+/// for PPO's team preset and DQN's alike.
 #[test]
 fn decision_settings_without_their_prerequisites_are_refused() {
     use naosoccer_learn::config::{PpoConfig, Preset};
@@ -1564,4 +1681,47 @@ fn decision_settings_without_their_prerequisites_are_refused() {
         },
         "--approach-action",
     );
+    // DQN's team preset takes the same actions and the same checks; a warm
+    // start stays PPO's.
+    let dqn = || {
+        let mut cfg = tiny_config(Algo::Dqn, 1);
+        cfg.dqn = naosoccer_learn::config::DqnConfig::team();
+        cfg.dqn.decision.as_mut().unwrap().pass = true;
+        cfg
+    };
+    let refused = |edit: &dyn Fn(&mut naosoccer_policy::DecisionConfig), needle: &str| {
+        let mut cfg = dqn();
+        edit(cfg.dqn.decision.as_mut().unwrap());
+        let err = train(&cfg, &dir, &mut |_| {}).unwrap_err().to_string();
+        assert!(err.contains(needle), "{err}");
+        assert!(!err.contains("for PPO"), "{err}");
+    };
+    refused(
+        &|d| {
+            d.pass = false;
+            d.support = true;
+        },
+        "--pass-action",
+    );
+    refused(&|d| d.defend = true, "--support-action");
+    refused(&|d| d.support_hold = 40, "--support-action");
+    refused(&|d| d.chasers = 2, "--support-action");
+    refused(
+        &|d| {
+            d.support = true;
+            d.chasers = 4;
+        },
+        "1 to 3",
+    );
+    refused(
+        &|d| {
+            d.support = true;
+            d.approach_only = true;
+        },
+        "--approach-action",
+    );
+    let mut cfg = dqn();
+    cfg.init_from = Some(dir.join("final.safetensors"));
+    let err = train(&cfg, &dir, &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("--init-from") && err.contains("DQN"), "{err}");
 }

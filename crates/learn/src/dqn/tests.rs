@@ -1,5 +1,6 @@
 use super::*;
 use crate::config::DqnPreset;
+use naosoccer_policy::actions::{NetAction, ACTIONS};
 
 #[test]
 fn td_target_is_reward_plus_discounted_max_unless_done() {
@@ -21,7 +22,7 @@ fn td_target_is_reward_plus_discounted_max_unless_done() {
 
 #[test]
 fn the_q_network_has_five_linear_layers() {
-    let net = QNet::with_input(OBS_DIM, &DqnConfig::default().hidden, "q0");
+    let net = QNet::with_input(OBS_DIM, &DqnConfig::default().hidden, ACTIONS, "q0");
     let mut names: Vec<String> = net
         .vs
         .variables()
@@ -128,14 +129,18 @@ fn epsilon_greedy_never_picks_a_masked_shoot() {
     use rand::SeedableRng;
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let q = [0.0f32, 1.0, 0.0, 5.0, 0.0];
+    let (ok, out) = (
+        allowed_actions(true, 0, ACTIONS),
+        allowed_actions(false, 0, ACTIONS),
+    );
     assert_eq!(
-        epsilon_greedy(&q, true, 0.0, &mut rng),
+        epsilon_greedy(&q, ok, 0.0, &mut rng),
         NetAction::Shoot.index()
     );
-    assert_eq!(epsilon_greedy(&q, false, 0.0, &mut rng), 1);
+    assert_eq!(epsilon_greedy(&q, out, 0.0, &mut rng), 1);
     let mut seen = [0usize; ACTIONS];
     for _ in 0..2000 {
-        seen[epsilon_greedy(&q, false, 1.0, &mut rng)] += 1;
+        seen[epsilon_greedy(&q, out, 1.0, &mut rng)] += 1;
     }
     assert_eq!(seen[NetAction::Shoot.index()], 0, "{seen:?}");
     assert!(
@@ -146,9 +151,203 @@ fn epsilon_greedy_never_picks_a_masked_shoot() {
     );
     let mut seen = [0usize; ACTIONS];
     for _ in 0..2000 {
-        seen[epsilon_greedy(&q, true, 1.0, &mut rng)] += 1;
+        seen[epsilon_greedy(&q, ok, 1.0, &mut rng)] += 1;
     }
     assert!(seen.iter().all(|&c| c > 300), "{seen:?}");
+}
+
+/// The five-action choice as it was before DQN's team preset had more
+/// actions: a `shoot_ok` flag, the random draw skipping a masked `shoot`,
+/// the greedy one starting from `forward`.
+fn epsilon_greedy_five(q: &[f32], shoot_ok: bool, epsilon: f64, rng: &mut ChaCha8Rng) -> usize {
+    let shoot = NetAction::Shoot.index();
+    if rng.random::<f64>() < epsilon {
+        let a = rng.random_range(0..ACTIONS - usize::from(!shoot_ok));
+        return if !shoot_ok && a >= shoot { a + 1 } else { a };
+    }
+    let mut best = 0;
+    for (i, &x) in q.iter().enumerate() {
+        if (i != shoot || shoot_ok) && x > q[best] {
+            best = i;
+        }
+    }
+    best
+}
+
+/// A five-action team whose only mask is `shoot`'s acts bit for bit as
+/// before: the same choices and the same draws from the generator (the
+/// pinned DQN run depends on it).
+#[test]
+fn five_actions_choose_and_draw_as_before() {
+    use rand::SeedableRng;
+    let (mut a, mut b) = (ChaCha8Rng::seed_from_u64(9), ChaCha8Rng::seed_from_u64(9));
+    let mut q = [0.0f32; ACTIONS];
+    for i in 0..20_000 {
+        for (j, v) in q.iter_mut().enumerate() {
+            // Ties (0.0) and a varying best, shoot among them.
+            *v = ((i * 7 + j * 3) % 5) as f32 - 2.0;
+        }
+        let ok = i % 3 != 0;
+        let eps = [0.0, 0.3, 1.0][i % 3];
+        let new = epsilon_greedy(&q, allowed_actions(ok, 0, ACTIONS), eps, &mut a);
+        assert_eq!(new, epsilon_greedy_five(&q, ok, eps, &mut b), "draw {i}");
+    }
+    assert_eq!(a.random::<u64>(), b.random::<u64>(), "the same stream");
+}
+
+/// With more actions and bans (roles, `pass` without a receiver, a masked
+/// `shoot`): never a banned action, every allowed one drawn, and greedy is
+/// the best allowed one even where a banned one (`forward`, the first)
+/// values more.
+#[test]
+fn epsilon_greedy_keeps_to_the_allowed_actions() {
+    use naosoccer_policy::actions::ROLE_BANNED;
+    use rand::SeedableRng;
+    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    let k = 9;
+    let q = [9.0f32, 8.0, 7.0, 6.0, 1.0, 5.0, 2.0, 4.0, 3.0];
+    let bans = ROLE_BANNED | NetAction::Pass.bit() | NetAction::Approach.bit();
+    let allowed = allowed_actions(false, bans, k);
+    let expect = [NetAction::Stay, NetAction::Support, NetAction::Defend];
+    assert_eq!(
+        allowed,
+        expect.iter().fold(0, |s, a| s | a.bit()),
+        "stay, support, defend"
+    );
+    assert_eq!(
+        epsilon_greedy(&q, allowed, 0.0, &mut rng),
+        NetAction::Defend.index()
+    );
+    let mut seen = [0usize; 9];
+    for _ in 0..3000 {
+        seen[epsilon_greedy(&q, allowed, 1.0, &mut rng)] += 1;
+    }
+    for (i, &c) in seen.iter().enumerate() {
+        if allowed & (1 << i) != 0 {
+            assert!(c > 800, "{i} drawn {c} times of 3000: {seen:?}");
+        } else {
+            assert_eq!(c, 0, "banned {i} drawn: {seen:?}");
+        }
+    }
+    // Half random: still never banned.
+    for _ in 0..2000 {
+        let a = epsilon_greedy(&q, allowed, 0.5, &mut rng);
+        assert!(allowed & (1 << a) != 0, "{a}");
+    }
+}
+
+/// The target's max (and Double DQN's online argmax) run over the next
+/// state's allowed actions only, as the replay masks them: a banned next
+/// action with the largest value is neither chosen nor valued.
+#[test]
+fn the_target_ignores_banned_next_actions() {
+    use rand::SeedableRng;
+    let k = 9;
+    let mut replay = Replay::new(4, k);
+    let o = [0.0f32; OBS_DIM];
+    // Row 0: support and defend only; row 1: everything but forward.
+    let only = NetAction::Support.bit() | NetAction::Defend.bit();
+    let not_forward = all_actions(k) & !NetAction::Forward.bit();
+    replay.push(&o, 0, 0.0, &o, 1.0, only);
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let (_, _, _, _, _, mask) = replay.sample(1, &mut rng);
+    assert_eq!(mask.size(), [1, k as i64]);
+    let m = values(&mask);
+    for (a, &x) in m.iter().enumerate() {
+        let allowed = only & (1 << a) != 0;
+        assert_eq!(x, if allowed { 0.0 } else { MASKED_Q }, "{a}: {m:?}");
+    }
+    let mut rows = m;
+    let mut second = vec![0.0f32; k];
+    second[NetAction::Forward.index()] = MASKED_Q;
+    assert_eq!(allowed_actions(true, !not_forward, k), not_forward);
+    rows.extend(second);
+    let mask = Tensor::from_slice(&rows).view([2, k as i64]);
+    // Forward (banned in both rows) values most; then pass (banned in
+    // row 0), then defend.
+    let q = Tensor::from_slice(&[
+        10.0f32, 0.0, 0.0, 0.0, 0.0, 8.0, 1.0, 0.0, 3.0, //
+        10.0, 0.0, 0.0, 0.0, 0.0, 8.0, 1.0, 0.0, 3.0,
+    ])
+    .view([2, k as i64]);
+    let r = Tensor::from_slice(&[0.0f32, 0.0]);
+    let g = Tensor::from_slice(&[1.0f32, 1.0]);
+    assert_eq!(
+        values(&td_target_discounted(&r, &g, &q, None, Some(&mask))),
+        [3.0, 8.0]
+    );
+    // Double DQN: the online network prefers approach (banned in row 0)
+    // and support; the target values the choice.
+    let online = Tensor::from_slice(&[
+        0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0, 9.0, 0.0, //
+        0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0, 9.0, 0.0,
+    ])
+    .view([2, k as i64]);
+    assert_eq!(
+        values(&td_target_discounted(
+            &r,
+            &g,
+            &q,
+            Some(&online),
+            Some(&mask)
+        )),
+        [1.0, 0.0]
+    );
+}
+
+/// Without masks (the paper, an episode's end) the replay's mask is all
+/// zeros, as the five-action buffer's was.
+#[test]
+fn an_unmasked_next_state_masks_nothing() {
+    use rand::SeedableRng;
+    let mut replay = Replay::new(2, ACTIONS);
+    let o = [0.0f32; OBS_DIM];
+    replay.push(&o, 1, 1.0, &o, 0.0, all_actions(ACTIONS));
+    replay.push(&o, 2, 1.0, &o, 0.5, allowed_actions(false, 0, ACTIONS));
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let (_, a, _, _, _, mask) = replay.sample(64, &mut rng);
+    let (a, m) = (values(&a.to_kind(Kind::Float)), values(&mask));
+    for (i, &act) in a.iter().enumerate() {
+        let mut want = [0.0f32; ACTIONS];
+        if act == 2.0 {
+            want[NetAction::Shoot.index()] = MASKED_Q;
+        }
+        assert_eq!(m[i * ACTIONS..(i + 1) * ACTIONS], want);
+    }
+}
+
+/// `Dqn::q_values` hands out each row's network outputs, one per action of
+/// the decision settings, with one shared network and with one per robot.
+#[test]
+fn q_values_are_the_networks_outputs_for_every_action() {
+    let _ = tch::no_grad_guard();
+    for (shared, pass) in [(true, false), (true, true), (false, true)] {
+        let mut cfg = DqnConfig::team();
+        cfg.shared = shared;
+        cfg.hidden = vec![8];
+        let d = cfg.decision.as_mut().unwrap();
+        if pass {
+            (d.pass, d.support, d.defend) = (true, true, true);
+        }
+        let k = cfg.actions();
+        assert_eq!(k, if pass { 9 } else { ACTIONS });
+        let robots = 2;
+        let mut dqn = Dqn::new(cfg, robots, OBS_DIM).unwrap();
+        let n = 4;
+        let obs: Vec<f32> = (0..n * OBS_DIM).map(|i| (i % 7) as f32 * 0.1).collect();
+        let mut q = Vec::new();
+        dqn.q_values(&obs, robots, &mut q);
+        assert_eq!(q.len(), n * k);
+        for i in 0..n {
+            let x = Tensor::from_slice(&obs[i * OBS_DIM..(i + 1) * OBS_DIM]).view([1, -1]);
+            let want = values(&dqn.nets[dqn.net_of(i % robots)].q(&x));
+            // (A batch of one rounds a little differently.)
+            let got = &q[i * k..(i + 1) * k];
+            let close = got.iter().zip(&want).all(|(a, b)| (a - b).abs() < 1e-5);
+            assert!(close, "row {i}, shared {shared}: {got:?} vs {want:?}");
+        }
+        assert!(q.iter().any(|&v| v != 0.0));
+    }
 }
 
 #[test]

@@ -48,11 +48,6 @@ pub(crate) fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             cfg.algo, cfg.obs_version
         )));
     }
-    if cfg.dqn.decision.is_some_and(|d| d.pass) {
-        return Err(LearnError::Config(
-            "the pass action is for PPO (--algo ppo --preset team) only".into(),
-        ));
-    }
     let decisions = [cfg.ppo.decision, cfg.dqn.decision];
     if decisions.iter().flatten().any(|d| d.support && !d.pass) {
         return Err(LearnError::Config(
@@ -117,7 +112,9 @@ pub(crate) fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
     }
     if cfg.init_from.is_some() && (cfg.algo != Algo::Ppo || cfg.ppo.decision.is_none()) {
         return Err(LearnError::Config(
-            "--init-from starts PPO team-preset runs (--algo ppo --preset team) only".into(),
+            "--init-from starts PPO team-preset runs (--algo ppo --preset team) only; a DQN \
+             team starts from fresh weights"
+                .into(),
         ));
     }
     if cfg.init_support_bias.is_some()
@@ -160,8 +157,7 @@ pub(crate) fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
             threads: cfg.threads,
             seed: cfg.seed,
             support_spot: cfg
-                .ppo
-                .decision
+                .decision()
                 .map_or_else(Default::default, |d| d.support_spot),
         },
         opponent_for(cfg)?,

@@ -101,6 +101,54 @@ pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConf
     banned
 }
 
+/// Every action of a row of `actions` outputs, as bits.
+pub const fn all_actions(actions: usize) -> ActionSet {
+    ((1u32 << actions) - 1) as ActionSet
+}
+
+/// The actions of a row of `actions` outputs a robot may choose, as bits:
+/// those `bans` ([`banned_actions`], [`row_bans`]) does not ban, `shoot`
+/// only when `shoot_ok`. What a DQN team acts (greedy or epsilon-greedy)
+/// and bootstraps over.
+pub fn allowed_actions(shoot_ok: bool, bans: ActionSet, actions: usize) -> ActionSet {
+    let shoot = if shoot_ok { 0 } else { NetAction::Shoot.bit() };
+    all_actions(actions) & !bans & !shoot
+}
+
+/// The `k`-th (from 0) action of `allowed`, by index: a uniform draw among
+/// `allowed.count_ones()` values picks an allowed action uniformly. Past
+/// the last: the last allowed one (`stay` when there is none).
+pub fn nth_allowed(allowed: ActionSet, k: usize) -> usize {
+    let mut last = NetAction::Stay.index();
+    let mut seen = 0;
+    for a in NetAction::ALL {
+        if allowed & a.bit() != 0 {
+            if seen == k {
+                return a.index();
+            }
+            last = a.index();
+            seen += 1;
+        }
+    }
+    last
+}
+
+/// The index of the largest of the values of `q` that `allowed` allows
+/// (the first on ties): a greedy DQN choice. With nothing allowed, the
+/// largest of all.
+pub fn argmax_allowed(q: &[f32], allowed: ActionSet) -> usize {
+    let ok = |i: usize| allowed & (1 << i) != 0;
+    let Some(mut best) = (0..q.len()).find(|&i| ok(i)) else {
+        return super::argmax(q);
+    };
+    for (i, &x) in q.iter().enumerate() {
+        if ok(i) && x > q[best] {
+            best = i;
+        }
+    }
+    best
+}
+
 /// Additive logit masks for `n` rows: 0, or [`MASKED_LOGIT`] on `shoot`
 /// where `shoot_ok` is false.
 pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {

@@ -19,8 +19,9 @@ mod steps;
 
 pub use hold::{is_free, Hold};
 pub use masks::{
-    action_mask, banned_actions, is_chaser, mask_row, pass_possible, row_bans, shoot_mask,
-    APPROACH_ONLY_BANNED, ROLE_BANNED, SUPPORT_ONLY_BANNED,
+    action_mask, all_actions, allowed_actions, argmax_allowed, banned_actions, is_chaser, mask_row,
+    nth_allowed, pass_possible, row_bans, shoot_mask, APPROACH_ONLY_BANNED, ROLE_BANNED,
+    SUPPORT_ONLY_BANNED,
 };
 pub use steps::{
     approach_action, defend_action, defend_spot, support_action, support_spot, to_action,
@@ -365,6 +366,37 @@ mod tests {
     #[test]
     fn argmax_takes_the_first_of_ties() {
         assert_eq!(argmax(&[0.0, 3.0, 3.0, -1.0]), 1);
+    }
+
+    /// DQN's allowed sets: the k-th allowed action of a uniform draw is the
+    /// old five-action scheme (a masked `shoot` skipped) bit for bit, and
+    /// greedy choices never leave the set.
+    #[test]
+    fn allowed_actions_draw_and_argmax_within_the_set() {
+        assert_eq!(all_actions(5), 0b1_1111);
+        assert_eq!(all_actions(9), 0b1_1111_1111);
+        let shoot = NetAction::Shoot.index();
+        for ok in [true, false] {
+            let allowed = allowed_actions(ok, 0, ACTIONS);
+            let n = allowed.count_ones() as usize;
+            assert_eq!(n, ACTIONS - usize::from(!ok));
+            for k in 0..n {
+                let old = if !ok && k >= shoot { k + 1 } else { k };
+                assert_eq!(nth_allowed(allowed, k), old);
+            }
+        }
+        // Bans beyond the row's width do not count; shoot follows shoot_ok.
+        let bans = NetAction::Forward.bit() | NetAction::Pass.bit();
+        let allowed = allowed_actions(false, bans, 7);
+        let listed: Vec<usize> = (0..allowed.count_ones() as usize)
+            .map(|k| nth_allowed(allowed, k))
+            .collect();
+        assert_eq!(listed, [1, 2, 4, 6]);
+        let q = [9.0, 1.0, 3.0, 8.0, 3.0, 7.0, 2.0];
+        assert_eq!(argmax_allowed(&q, allowed), 2, "first of the allowed ties");
+        assert_eq!(argmax_allowed(&q, all_actions(7)), 0);
+        assert_eq!(argmax_allowed(&q, NetAction::Support.bit()), 6);
+        assert_eq!(argmax_allowed(&q, 0), 0, "nothing allowed: plain argmax");
     }
 
     #[test]

@@ -27,8 +27,9 @@ use crate::Policy;
 use naosoccer_proto::{Action, Observation, Tick};
 
 use crate::actions::{
-    action_count, argmax, banned_actions, mask_row, row_bans, sample, sample_uniform, to_action,
-    DecisionConfig, Hold, NetAction, SupportSpot, ACTIONS,
+    action_count, all_actions, allowed_actions, argmax, argmax_allowed, banned_actions, mask_row,
+    nth_allowed, row_bans, sample, sample_uniform, to_action, DecisionConfig, Hold, NetAction,
+    SupportSpot,
 };
 use crate::actions::{ActionSet, MASKED_LOGIT};
 use crate::mlp::{Activation, Mlp, Weights};
@@ -90,7 +91,8 @@ pub struct LearnedPolicy {
     decision: Option<DecisionConfig>,
     /// Per robot (match seed, team, player) decision state.
     holds: BTreeMap<(u64, usize, usize), Hold>,
-    /// Outputs per row: 5, or 6 for a team trained with `pass`.
+    /// Outputs per row ([`DecisionConfig::actions`]): 5, or up to 9 for
+    /// a team trained with `pass`, `support`, `approach` and `defend`.
     actions: usize,
     /// Per row of the decision in progress: the actions it may not choose
     /// beyond a `shoot` out of reach ([`banned_actions`], filled from the
@@ -117,13 +119,6 @@ impl LearnedPolicy {
         let scale = cfg.scale();
         let dim = scale.dim();
         let actions = action_count(cfg.decision());
-        if actions > ACTIONS && cfg.algo != Algo::Ppo {
-            return Err(PolicyError::Weights {
-                name: "q*".into(),
-                reason: "the `pass` action is PPO's only; this DQN run's configuration asks for it"
-                    .into(),
-            });
-        }
         let check = |m: Mlp, prefix: &str| -> Result<Mlp, PolicyError> {
             if m.input() != dim || m.output() != actions {
                 return Err(PolicyError::Weights {
@@ -329,20 +324,30 @@ impl LearnedPolicy {
     ) {
         self.decide(obs, players, uniforms, out);
         if let ActMode::EpsilonGreedy { epsilon } = self.mode {
-            let masks = self.masks_shoot();
             for (i, (a, &u)) in out.iter_mut().zip(uniforms).enumerate() {
                 if u < epsilon {
                     // Given u < epsilon, u / epsilon is uniform on [0, 1):
                     // a uniform draw among the actions allowed, which
-                    // leaves out a masked `shoot` (ball out of reach).
-                    let masked = masks && obs[i * OBS_DIM + IN_REACH_FEATURE] <= 0.5;
-                    // (DQN teams have the paper's five actions.)
-                    let allowed = if masked { ACTIONS - 1 } else { ACTIONS };
-                    let k = ((u / epsilon * allowed as f32) as usize).min(allowed - 1);
-                    let shoot = NetAction::Shoot.index();
-                    *a = if masked && k >= shoot { k + 1 } else { k };
+                    // leaves out a masked `shoot` (ball out of reach) and
+                    // what the decision settings ban.
+                    let allowed = self.allowed(obs, i);
+                    let n = (allowed.count_ones() as usize).max(1);
+                    let k = ((u / epsilon * n as f32) as usize).min(n - 1);
+                    *a = nth_allowed(allowed, k);
                 }
             }
+        }
+    }
+
+    /// The actions row `i` of `obs` may choose: `shoot` per the shoot mask,
+    /// the rest per the row's bans ([`row_bans`]); all of them should
+    /// nothing be left (as DQN's training draws).
+    fn allowed(&self, obs: &[f32], i: usize) -> ActionSet {
+        let shoot_ok = !self.masks_shoot() || obs[i * OBS_DIM + IN_REACH_FEATURE] > 0.5;
+        let bans = row_bans(&self.banned, i, self.actions);
+        match allowed_actions(shoot_ok, bans, self.actions) {
+            0 => all_actions(self.actions),
+            a => a,
         }
     }
 
@@ -385,11 +390,11 @@ impl LearnedPolicy {
                     }
                     net.forward(&self.rows, idx.len(), OBS_DIM, &mut self.out);
                     for (j, &i) in idx.iter().enumerate() {
-                        let row = &mut self.out[j * na..(j + 1) * na];
-                        if !shoot_ok(i) {
-                            row[NetAction::Shoot.index()] = f32::NEG_INFINITY;
-                        }
-                        out[i] = argmax(row);
+                        // Greedy over the allowed actions, as in training.
+                        let row = &self.out[j * na..(j + 1) * na];
+                        let allowed =
+                            allowed_actions(shoot_ok(i), row_bans(&self.banned, i, na), na);
+                        out[i] = argmax_allowed(row, allowed);
                     }
                 }
             }
