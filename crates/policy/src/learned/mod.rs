@@ -258,7 +258,7 @@ impl LearnedPolicy {
         if !deciding.is_empty() {
             let half = [self.scale.half_length, self.scale.half_width];
             let mut acts = vec![0usize; deciding.len()];
-            self.act_rows_keyed(&feats, &players, &keys, &mut acts);
+            self.act_rows_banned(&feats, &players, &keys, &mut acts);
             for (&(at, key, tick), &a) in deciding.iter().zip(&acts) {
                 out[at] = a;
                 if let Some(d) = self.decision {
@@ -305,7 +305,6 @@ impl LearnedPolicy {
             );
         }
         self.calls += 1;
-        self.banned.clear();
         self.act_rows_keyed(obs, players, &keys, out);
         self.keys = keys;
     }
@@ -316,6 +315,20 @@ impl LearnedPolicy {
     /// carry no observation to find a pass receiver in, so a team trained
     /// with `pass` does not pass here; [`LearnedPolicy::act_matches`] does.
     pub fn act_rows_keyed(
+        &mut self,
+        obs: &[f32],
+        players: &[usize],
+        uniforms: &[f32],
+        out: &mut [usize],
+    ) {
+        // Rows carry no bans: none from an earlier `act_matches` either.
+        self.banned.clear();
+        self.act_rows_banned(obs, players, uniforms, out);
+    }
+
+    /// [`LearnedPolicy::act_rows_keyed`] under the bans `self.banned` holds
+    /// for these rows (set by [`LearnedPolicy::act_matches`]).
+    fn act_rows_banned(
         &mut self,
         obs: &[f32],
         players: &[usize],
