@@ -1219,6 +1219,62 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
     }
 }
 
+/// A frozen team as the opponent plays as it plays anywhere: its
+/// `support` walks to its own support spot (here `facing`), not to the
+/// learner's (`ahead`). The environment's match equals one played with the
+/// team's own `act_matches` and `action`.
+#[test]
+fn a_network_opponent_plays_with_its_own_support_spot() {
+    use naosoccer_learn::env::episode_seed;
+    use naosoccer_policy::actions::SupportSpot;
+    use naosoccer_proto::{Observation, Team, ROBOTS};
+    use naosoccer_referee::Match;
+
+    let team = concat!(
+        "ppo:",
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/policies/ppo-team-seed1"
+    );
+    let cfg = MatchConfig::default();
+    let mut env = VecEnv::new(
+        &cfg,
+        EnvConfig {
+            matches: 1,
+            learners: vec![0, 1, 2, 3],
+            teammates: PolicyKind::Idle,
+            threads: 1,
+            seed: 9,
+            support_spot: SupportSpot::Ahead,
+        },
+        Opponent::Net(Box::new(LearnedPolicy::load(team).unwrap())),
+    )
+    .unwrap();
+    let mut m = Match::new(&cfg, episode_seed(9, 0, 0)).unwrap();
+    let mut red = LearnedPolicy::load(team).unwrap();
+    let stay = vec![4usize; 4];
+    let mut supports = 0;
+    for _ in 0..300 {
+        let obs: Vec<Observation> = (0..4).map(|p| m.observe(Team::Red, p)).collect();
+        let mut idx = [0usize; 4];
+        red.act_matches(&[(m.seed(), obs.as_slice())], &mut idx);
+        supports += idx.iter().filter(|&&a| a == 6).count();
+        let mut joint = [Action::Stay; ROBOTS];
+        for p in 0..4 {
+            joint[4 + p] = red.action(idx[p], &obs[p]);
+        }
+        m.step(&joint);
+        env.step(&stay).unwrap();
+    }
+    assert!(supports > 0, "the team chose support");
+    for p in 0..4 {
+        assert_eq!(
+            env.learner_observation(p),
+            &m.observe(Team::Blue, p),
+            "player {p}"
+        );
+    }
+}
+
 /// Scenarios (`--scenarios`): the last matches of the batch play episodes
 /// of scenario files, each starting exactly where the scenario drawn from
 /// its episode's seed says. An episode ends with its play (here 7 s) and

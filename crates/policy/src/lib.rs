@@ -53,10 +53,18 @@ pub trait BatchActor: Send {
     /// and per-robot decision state) and its robots' observations in player
     /// order. `out` gets one action index per observation, in order.
     fn act_teams(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]);
+
+    /// The protocol action that action index `index` is for a robot
+    /// observing `obs`, as this team plays it (its own support spot).
+    fn action(&self, index: usize, obs: &Observation) -> naosoccer_proto::Action;
 }
 
 impl BatchActor for LearnedPolicy {
     fn act_teams(&mut self, teams: &[(u64, &[Observation])], out: &mut [usize]) {
         self.act_matches(teams, out);
+    }
+
+    fn action(&self, index: usize, obs: &Observation) -> naosoccer_proto::Action {
+        LearnedPolicy::action(self, index, obs)
     }
 }

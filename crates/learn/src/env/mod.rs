@@ -98,7 +98,8 @@ pub struct VecEnv {
     truncated: Vec<bool>,
     /// Those rows' observation vectors at the cut (before the restart).
     final_feats: Vec<f32>,
-    opp_actions: Vec<usize>,
+    /// Network opponents' actions, as their teams play them.
+    opp_actions: Vec<Action>,
     ticks: u64,
 }
 
@@ -317,7 +318,7 @@ impl VecEnv {
         let l = self.env.learners.len();
         assert_eq!(actions.len(), self.rows(), "one action per learning robot");
         self.opp_actions
-            .resize(self.env.matches * PLAYERS_PER_TEAM, 0);
+            .resize(self.env.matches * PLAYERS_PER_TEAM, Action::Stay);
         let mut teams: Vec<(u64, &[Observation])> = Vec::new();
         let mut at: Vec<usize> = Vec::new();
         let mut acts: Vec<usize> = Vec::new();
@@ -337,9 +338,13 @@ impl VecEnv {
             }
             acts.resize(teams.len() * PLAYERS_PER_TEAM, 0);
             actor.act_teams(&teams, &mut acts);
-            for (i, &j) in at.iter().enumerate() {
-                self.opp_actions[j * PLAYERS_PER_TEAM..(j + 1) * PLAYERS_PER_TEAM]
-                    .copy_from_slice(&acts[i * PLAYERS_PER_TEAM..(i + 1) * PLAYERS_PER_TEAM]);
+            // Each index becomes the step its own team takes (a `support`
+            // toward its own support spot), from the observation it acted on.
+            for (i, (&j, (_, obs))) in at.iter().zip(&teams).enumerate() {
+                for p in 0..PLAYERS_PER_TEAM {
+                    self.opp_actions[j * PLAYERS_PER_TEAM + p] =
+                        actor.action(acts[i * PLAYERS_PER_TEAM + p], &obs[p]);
+                }
             }
         }
         let threads = self.env.threads.clamp(1, self.env.matches);
@@ -348,7 +353,7 @@ impl VecEnv {
         let env = &self.env;
         let scale = &self.scale;
         let mix = &self.mix;
-        let opp_actions: &[usize] = &self.opp_actions;
+        let opp_actions: &[Action] = &self.opp_actions;
         let work = self
             .slots
             .chunks_mut(per)
@@ -407,7 +412,7 @@ impl VecEnv {
     }
 }
 
-fn opp_chunk(opp: &[usize], chunk: usize, per: usize) -> &[usize] {
+fn opp_chunk(opp: &[Action], chunk: usize, per: usize) -> &[Action] {
     let n = per * PLAYERS_PER_TEAM;
     let start = (chunk * n).min(opp.len());
     &opp[start..(start + n).min(opp.len())]
@@ -421,7 +426,7 @@ fn step_chunk(
     mix: &Mix,
     slots: &mut [Slot],
     actions: &[usize],
-    opp_actions: &[usize],
+    opp_actions: &[Action],
     feats: &mut [f32],
     rewards: &mut [f32],
     dones: &mut [bool],
@@ -501,7 +506,7 @@ impl Slot {
         &mut self,
         env: &EnvConfig,
         actions: &[usize],
-        opp: Option<&[usize]>,
+        opp: Option<&[Action]>,
         rewards: &mut [f32],
     ) -> bool {
         let mut joint = [Action::Stay; ROBOTS];
@@ -517,9 +522,7 @@ impl Slot {
             joint[own + p] = to_action(net(actions[k]), &self.obs[own + p], half, spot);
         }
         if let Some(opp) = opp {
-            for p in 0..PLAYERS_PER_TEAM {
-                joint[other + p] = to_action(net(opp[p]), &self.obs[other + p], half, spot);
-            }
+            joint[other..other + PLAYERS_PER_TEAM].copy_from_slice(opp);
         }
         for (i, policy) in self.policies.iter_mut().enumerate() {
             if let Some(policy) = policy {
