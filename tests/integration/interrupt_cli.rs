@@ -188,3 +188,97 @@ fn a_closed_output_pipe_ends_eval_quietly() {
         "{status:?} {err}"
     );
 }
+
+/// Ctrl-C during a recipe run's first stage, as a user stops a long run: the
+/// process dies (training keeps no state in memory worth saving), and
+/// `train --resume DIR` continues from the stage's last checkpoint to the
+/// same final weights, byte for byte, as the run that was never stopped.
+#[test]
+#[cfg(all(target_os = "linux", feature = "train"))]
+fn ctrl_c_during_a_recipe_run_resumes_to_the_same_team() {
+    let recipe = scratch("interrupt-train", "recipe.toml");
+    std::fs::write(
+        &recipe,
+        r#"description = "a stage long enough to stop, and a short one"
+[[stage]]
+name = "first"
+algo = "ppo"
+preset = "team"
+minutes = 0.1
+steps = 60000
+matches = 4
+rollout = 32
+epochs = 1
+checkpoint-every = 1024
+[[stage]]
+name = "second"
+algo = "ppo"
+preset = "team"
+init-from = "previous"
+minutes = 0.1
+steps = 2048
+matches = 4
+rollout = 32
+epochs = 1
+"#,
+    )
+    .unwrap();
+    let run = |name: &str| {
+        let dir = scratch("interrupt-train", name);
+        let _ = std::fs::remove_dir_all(&dir);
+        dir
+    };
+    let whole = run("whole");
+    let out = naosoccer(&[
+        "train",
+        "--recipe",
+        recipe.to_str().unwrap(),
+        "--out",
+        whole.to_str().unwrap(),
+        "--seed",
+        "4",
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+
+    let cut = run("cut");
+    let child = naosoccer_cmd()
+        .args(["train", "--recipe", recipe.to_str().unwrap(), "--out"])
+        .arg(&cut)
+        .args(["--seed", "4"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Stopped once the first stage has a resumable checkpoint.
+    let checkpoints = cut.join("01-first/checkpoints");
+    loop {
+        let resumable = std::fs::read_dir(&checkpoints).is_ok_and(|d| {
+            d.flatten()
+                .any(|e| e.file_name().to_string_lossy().ends_with(".resume.json"))
+        });
+        if resumable {
+            break;
+        }
+        // Polling a condition, not timing it: the pause only spares the CPU.
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    interrupt(&child);
+    let status = child.wait_with_output().unwrap().status;
+    assert!(!status.success(), "stopped by Ctrl-C: {status:?}");
+    assert!(
+        !cut.join("01-first/final.safetensors").exists(),
+        "the first stage was stopped before its end"
+    );
+    let out = naosoccer(&["train", "--resume", cut.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(
+        text(&out).contains("continuing from its latest checkpoint"),
+        "{}",
+        text(&out)
+    );
+    assert!(
+        std::fs::read(whole.join("final.safetensors")).unwrap()
+            == std::fs::read(cut.join("final.safetensors")).unwrap(),
+        "the resumed run's team differs from the uninterrupted one's"
+    );
+}

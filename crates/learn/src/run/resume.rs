@@ -64,8 +64,12 @@ pub(crate) fn write_checkpoint(
     }
     let path = ck.join(format!("step-{n}.resume.json"));
     let json = serde_json::to_string_pretty(state).map_err(|e| LearnError::json(&path, e))?;
-    // Written last: a checkpoint counts once its resume state exists.
-    std::fs::write(&path, json).map_err(|e| LearnError::io(&path, e))
+    // Written last, and whole or not at all (a temporary file renamed): a
+    // checkpoint counts once its resume state exists, so a run killed at
+    // any moment (Ctrl-C) resumes from its last complete checkpoint.
+    let tmp = path.with_extension("json.tmp");
+    std::fs::write(&tmp, json).map_err(|e| LearnError::io(&tmp, e))?;
+    std::fs::rename(&tmp, &path).map_err(|e| LearnError::io(&path, e))
 }
 
 /// Loads a resumable checkpoint's weights into `live` and its
