@@ -330,22 +330,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
     assert_eq!(config["ppo"]["decision"]["approach_only"], true);
     assert_eq!(config["init_pass_from"], "turn_left");
     assert_eq!(config["init_support_bias"], 0.0);
-    let out = naosoccer(&[
-        "eval",
-        "--blue",
-        &format!("ppo:{run_s}"),
-        "--red",
-        "scripted",
-        "--matches",
-        "1",
-        "--minutes",
-        "0.2",
-    ]);
-    assert!(
-        out.status.success(),
-        "eval failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    plays_a_match(&format!("ppo:{run_s}"));
 
     let other = dir("cli_support_action_refused");
     let other_s = other.to_str().unwrap();
@@ -458,22 +443,7 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
         serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap();
     assert_eq!(config["ppo"]["decision"]["pass"], true);
     assert_eq!(config["init_from"], serde_json::json!(shipped));
-    let out = naosoccer(&[
-        "eval",
-        "--blue",
-        &format!("ppo:{run_s}"),
-        "--red",
-        "scripted",
-        "--matches",
-        "1",
-        "--minutes",
-        "0.2",
-    ]);
-    assert!(
-        out.status.success(),
-        "eval failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    plays_a_match(&format!("ppo:{run_s}"));
 
     // DQN's team preset takes the actions too (issue 40): it trains and
     // its team plays them.
@@ -493,22 +463,7 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
     for flag in ["pass", "support", "defend"] {
         assert_eq!(decision[flag], true, "{flag}: {decision}");
     }
-    let out = naosoccer(&[
-        "eval",
-        "--blue",
-        &format!("dqn:{dqn_s}"),
-        "--red",
-        "scripted",
-        "--matches",
-        "1",
-        "--minutes",
-        "0.2",
-    ]);
-    assert!(
-        out.status.success(),
-        "dqn eval failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    plays_a_match(&format!("dqn:{dqn_s}"));
 
     let other = dir("cli_pass_action_refused");
     let other_s = other.to_str().unwrap();
@@ -933,6 +888,27 @@ scenario-matches = 2
     assert!(!empty.exists(), "nothing written for a bad recipe");
     let out = naosoccer(&["train", "--recipe", recipe_s, "--steps", "5"]);
     assert!(!out.status.success(), "options beside --recipe are refused");
+}
+
+/// `eval` plays one short match of the team `spec` against `scripted`.
+#[cfg(feature = "train")]
+fn plays_a_match(spec: &str) {
+    let out = naosoccer(&[
+        "eval",
+        "--blue",
+        spec,
+        "--red",
+        "scripted",
+        "--matches",
+        "1",
+        "--minutes",
+        "0.2",
+    ]);
+    assert!(
+        out.status.success(),
+        "eval of {spec} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// A shipped pass drill's path (assets/scenarios/training/pass-K.toml).
