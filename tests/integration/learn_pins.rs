@@ -1,5 +1,6 @@
-//! Issue 41, item 5: the bytes a training run writes, pinned. Two short runs
-//! of the shipped `team` recipes go through the real binary, and the
+//! Issue 41, item 5: the bytes a training run writes, pinned. Short runs of
+//! the shipped `team` recipes and of the paper's presets go through the
+//! real binary, and the
 //! SHA-256 of their `metrics.csv` and `final.safetensors` must be the ones
 //! recorded here.
 //!
@@ -25,7 +26,13 @@
 //!   transitions, and its 2-minute episodes end after 77k; a 60k run would
 //!   pin untrained weights and no episode's end.
 //!
-//! Both run with `--threads 1` and the test profile's binary; a release
+//! - The per-tick presets, the paper's PPO and DQN and CleanRL's PPO
+//!   (every robot deciding every tick, through the same decision-level
+//!   environment): 60k transitions of 30-second episodes, so that episodes
+//!   end inside rollouts and checkpoints are written. Pinned before their
+//!   loops were folded into the two learners.
+//!
+//! All run with `--threads 1` and the test profile's binary; a release
 //! build writes the same bytes. libtorch picks its kernels by the CPU it
 //! runs on (ATen's AVX2 or AVX-512 code, MKL's per-vendor paths), and
 //! those round differently: the pins first recorded on one x86-64 machine
@@ -128,6 +135,79 @@ const DQN_TEAM: &[&str] = &[
 const DQN_TEAM_METRICS: &str = "072f6e5c44642dc2d637cba73a32b0728cb00688f9a35252720592decd9dc8ee";
 const DQN_TEAM_FINAL: &str = "21d6885ce22ebff3b27f1ed2578739dc8241b6e3f905875a2426619894b3e0f9";
 
+/// The paper's PPO (`--preset paper`, Algorithm 2: every robot deciding
+/// every tick, normalised discounted returns, 80 epochs over each batch),
+/// test-sized: 30-second episodes, so that episodes end inside rollouts.
+const PPO_PAPER: &[&str] = &[
+    "train",
+    "--algo",
+    "ppo",
+    "--config",
+    "assets/train.toml",
+    "--minutes",
+    "0.5",
+    "--steps",
+    "60000",
+    "--seed",
+    "1",
+    "--threads",
+    "1",
+    "--checkpoint-every",
+    "30000",
+];
+
+const PPO_PAPER_METRICS: &str = "a5873ff93d74e14ddb6811fc4e0362c74bb71e8de286654baed872672ad58a4f";
+const PPO_PAPER_FINAL: &str = "8581b48f7ab264a2986ffec8d002e4338e1c9b10dfd1524f8d6924597e879a4f";
+
+/// CleanRL's PPO (`--preset cleanrl`: GAE bootstrapped at the rollout's
+/// end, shuffled minibatches, gradient clipping), test-sized as above.
+const PPO_CLEANRL: &[&str] = &[
+    "train",
+    "--algo",
+    "ppo",
+    "--preset",
+    "cleanrl",
+    "--config",
+    "assets/train.toml",
+    "--minutes",
+    "0.5",
+    "--steps",
+    "60000",
+    "--seed",
+    "1",
+    "--threads",
+    "1",
+    "--checkpoint-every",
+    "30000",
+];
+
+const PPO_CLEANRL_METRICS: &str = "4424e40d1395dec3678bb530aec8cbb5225b02713053a3075945b80a3376ff6c";
+const PPO_CLEANRL_FINAL: &str = "513efcdeb1e174fb4da6ae384b239782c626f7c2564a341c6592b0bd31f9d76f";
+
+/// The paper's DQN (`--preset paper`, Algorithm 1: every robot deciding
+/// every tick, one network per robot, a learning step after every tick),
+/// test-sized as above.
+const DQN_PAPER: &[&str] = &[
+    "train",
+    "--algo",
+    "dqn",
+    "--config",
+    "assets/train.toml",
+    "--minutes",
+    "0.5",
+    "--steps",
+    "60000",
+    "--seed",
+    "1",
+    "--threads",
+    "1",
+    "--checkpoint-every",
+    "30000",
+];
+
+const DQN_PAPER_METRICS: &str = "f14711e4b5efa8cf0d5264f73d3d8cec8e6542ad471bd9a1ef77e6541e247c77";
+const DQN_PAPER_FINAL: &str = "facd19718bbf41a68fbdf9f93bc0a1dd80293189b72dae4c46e69bbb7753a24e";
+
 /// libtorch's portable kernels, independent of the CPU's vector extensions
 /// (see the module's comment).
 const PORTABLE: [(&str, &str); 3] = [
@@ -202,5 +282,38 @@ fn issue_41_the_dqn_team_recipe_writes_the_pinned_bytes() {
         "checkpoints/step-50048.safetensors",
         DQN_TEAM_METRICS,
         DQN_TEAM_FINAL,
+    );
+}
+
+#[test]
+fn issue_41_the_ppo_paper_preset_writes_the_pinned_bytes() {
+    run_and_check(
+        "pin_ppo_paper",
+        PPO_PAPER,
+        "checkpoints/step-32768.safetensors",
+        PPO_PAPER_METRICS,
+        PPO_PAPER_FINAL,
+    );
+}
+
+#[test]
+fn issue_41_the_ppo_cleanrl_preset_writes_the_pinned_bytes() {
+    run_and_check(
+        "pin_ppo_cleanrl",
+        PPO_CLEANRL,
+        "checkpoints/step-32768.safetensors",
+        PPO_CLEANRL_METRICS,
+        PPO_CLEANRL_FINAL,
+    );
+}
+
+#[test]
+fn issue_41_the_dqn_paper_preset_writes_the_pinned_bytes() {
+    run_and_check(
+        "pin_dqn_paper",
+        DQN_PAPER,
+        "checkpoints/step-30016.safetensors",
+        DQN_PAPER_METRICS,
+        DQN_PAPER_FINAL,
     );
 }
