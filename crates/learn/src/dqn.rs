@@ -26,13 +26,16 @@
 //! the state: not banned ([`naosoccer_policy::actions::banned_actions`])
 //! and `shoot` only in reach ([`allowed_actions`]).
 //!
-//! Read top to bottom: the loop of the decision-level MDP ([`train`]),
-//! acting ([`epsilon_greedy`] over [`Dqn::q_values`]), storing
-//! ([`Dqn::remember`], into [`crate::replay`]) and the update ([`Dqn::learn`],
-//! its target [`td_target_discounted`]). The run directory, metrics,
-//! opponents and checkpoints are the harness's ([`crate::run`]); the
-//! per-tick loop, in which every robot acts every tick, is
-//! [`crate::dqn_paper`].
+//! Both presets run one loop over the decision-level MDP
+//! ([`crate::env::decisions`]): in `paper` every robot decides every tick,
+//! unmasked, and each decision lasts that tick; in `team` a robot decides
+//! when it is free to act.
+//!
+//! Read top to bottom: the loop ([`train`]), acting ([`epsilon_greedy`]
+//! over [`Dqn::q_values`]), storing ([`Dqn::remember`], into
+//! [`crate::replay`]) and the update ([`Dqn::learn`], its target
+//! [`td_target_discounted`]). The run directory, metrics, opponents and
+//! checkpoints are the harness's ([`crate::run`]).
 
 use std::path::Path;
 
@@ -55,23 +58,22 @@ use naosoccer_policy::actions::{
 
 pub use crate::replay::MASKED_Q;
 
-/// Trains a DQN run on the decision-level MDP (`team` preset) into `out`.
+/// Trains a DQN run into `out`.
 ///
 /// Each tick, the robots free to act whose last decision ran out decide
-/// (epsilon-greedy over the actions allowed them); a decision closes when
-/// the robot next decides, or when the episode ends, and enters the n-step
-/// accumulator as one transition with its discounted reward and discount
-/// `gamma^ticks`. A learning step follows every tick in which a robot
-/// decided; a metrics row every `log_every` ticks.
+/// (epsilon-greedy over the actions allowed them; in the `paper` preset
+/// every robot, every tick, over every action); a decision closes when the
+/// robot next decides, when the episode ends, or (`paper`) at the tick's
+/// end, and enters the n-step accumulator as one transition with its
+/// discounted reward and discount `gamma^ticks`. A learning step follows
+/// every tick in which a robot decided; a metrics row every `log_every`
+/// ticks.
 pub fn train(
     cfg: &TrainConfig,
     out: &Path,
     progress: &mut dyn FnMut(&Progress<'_>),
 ) -> Result<TrainSummary, LearnError> {
-    let decision = cfg
-        .dqn
-        .decision
-        .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
+    let decision = cfg.dqn.decision;
     let mut env = make_env(cfg)?;
     let scale = run_scale(cfg);
     let robots = cfg.learners.len();
@@ -116,16 +118,23 @@ pub fn train(
             });
         }
         let finished = env.step(dec.actions())?;
+        let now = env.observations();
         dec.observe(&env, &mut |c| {
-            // Terminal: the next observation is never bootstrapped from.
+            // A one-tick decision (`paper`) goes on from the state reached;
+            // after an episode's end the next observation is never
+            // bootstrapped from.
             let r = c.row;
-            nstep.push(r, c.obs, c.action, c.reward, c.discount, true, &mut |t| {
+            let (next, done) = match c.end {
+                End::Tick => (&now[r * OBS_DIM..(r + 1) * OBS_DIM], false),
+                _ => (c.obs, true),
+            };
+            nstep.push(r, c.obs, c.action, c.reward, c.discount, done, &mut |t| {
                 dqn.remember(
                     r % robots,
                     t.obs,
                     t.action,
                     t.ret,
-                    c.obs,
+                    next,
                     t.discount,
                     all_actions(k),
                 )

@@ -33,13 +33,17 @@
 //!   run that starts from a trained team.
 //!
 //! **The learners**: one file each, read top to bottom: the loop, acting,
-//! storing, updating.
-//! - [`ppo`]: PPO for a team on the decision-level MDP (`--preset team`).
-//! - [`ppo_paper`]: PPO with every robot acting every tick: the paper's
-//!   Algorithm 2 and CleanRL's `ppo.py` (`paper`, `cleanrl`).
-//! - [`dqn`]: DQN on the decision-level MDP (`--preset team`); what it
-//!   stores, n-step returns and the replay ring, is [`replay`].
-//! - [`dqn_paper`]: the paper's Algorithm 1, every robot acting every tick.
+//! storing, updating; each runs every preset of its algorithm on
+//! [`env::decisions`] (robots deciding when free to act, or every robot
+//! every tick).
+//! - [`ppo`]: PPO: for a team on the decision-level MDP (`--preset
+//!   team`), and with every robot acting every tick (the paper's Algorithm
+//!   2, `paper`; CleanRL's `ppo.py`, `cleanrl`); what it stores,
+//!   decision-level transitions and their estimators (GAE, the paper's
+//!   returns), is [`rollout`].
+//! - [`dqn`]: DQN: the paper's Algorithm 1, every robot acting every
+//!   tick (`paper`), and on the decision-level MDP (`--preset team`); what
+//!   it stores, n-step returns and the replay ring, is [`replay`].
 //! - What they share: [`nets`] (the networks, value normalisation) and
 //!   [`adam`] (an Adam whose state a checkpoint saves).
 //!
@@ -56,7 +60,6 @@
 pub mod adam;
 pub mod config;
 pub mod dqn;
-pub mod dqn_paper;
 pub mod env;
 mod error;
 pub mod metrics;
@@ -64,8 +67,8 @@ pub mod nets;
 pub mod plot;
 pub mod policy;
 pub mod ppo;
-pub mod ppo_paper;
 pub mod replay;
+pub mod rollout;
 pub mod run;
 pub mod schedule;
 pub mod schedule_runner;

@@ -1,35 +1,42 @@
-//! PPO for a team (`team` preset): actor-critic on the decision-level MDP
-//! ([`crate::env::decisions`]). A robot decides only when it is free to act,
-//! movement persists, `shoot` (and what [`DecisionConfig`] bans) is masked,
-//! and a transition spans the ticks from one decision to the next: returns
-//! are discounted by the time that elapsed (`gamma^dt`, GAE with
-//! `(gamma lambda)^dt`), bootstrapped at rollout edges and where a drill
-//! cut an episode. On top of CleanRL's machinery (minibatches, per-batch
-//! advantage normalisation, gradient clipping): value normalisation, a KL
-//! early stop, learning-rate and entropy schedules, and an optional
-//! centralised critic (MAPPO: the critic reads the whole team's
-//! observation vectors).
+//! PPO for a team, in three presets over one loop: the decision-level
+//! MDP ([`crate::env::decisions`]), in which robots decide every tick in
+//! the per-tick presets and only when free to act in `team`.
+//!
+//! - `team`: a robot decides only when it is free to act, movement
+//!   persists, `shoot` (and what [`DecisionConfig`] bans) is masked, and a
+//!   transition spans the ticks from one decision to the next: returns are
+//!   discounted by the time that elapsed (`gamma^dt`, GAE with
+//!   `(gamma lambda)^dt`), bootstrapped at rollout edges and where a drill
+//!   cut an episode. On top of CleanRL's machinery: value normalisation, a
+//!   KL early stop, learning-rate and entropy schedules, an optional
+//!   centralised critic (MAPPO: the critic reads the whole team's
+//!   observation vectors), and an optimiser whose state a checkpoint saves.
+//! - `cleanrl`: CleanRL's `ppo.py`: every robot decides every tick; GAE
+//!   bootstrapped at the rollout's end, shuffled minibatches, gradient-norm
+//!   clipping.
+//! - `paper`: the paper's Algorithm 2: every robot decides every tick;
+//!   discounted returns normalised over the batch, `A = R_norm - V(s)`,
+//!   `K` epochs over the whole batch.
 //!
 //! Read top to bottom: the loop ([`train`]), acting ([`Ppo::act_masked`],
-//! [`Ppo::critic_values`]), storing ([`Transitions`]), the advantage
-//! ([`Transitions::gae`]) and the update ([`Ppo::update_decisions`]). The
-//! run directory, metrics, opponents and checkpoints are the harness's
-//! ([`crate::run`]); the per-tick presets (`paper`, `cleanrl`) are
-//! [`crate::ppo_paper`].
+//! [`Ppo::critic_values`]) and the update ([`Ppo::update`]). What it
+//! stores and its estimators are [`crate::rollout`]'s; the run directory,
+//! metrics, opponents and checkpoints are the harness's ([`crate::run`]).
 
 use std::path::Path;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tch::nn;
+use tch::nn::{self, OptimizerConfig};
 use tch::{Kind, Tensor};
 
 use crate::adam::Adam;
-use crate::config::{run_scale, PpoConfig, TrainConfig};
-use crate::env::decisions::{Closed, Decisions, End};
+use crate::config::{run_scale, PpoConfig, Preset, TrainConfig};
+use crate::env::decisions::{Decisions, End};
 use crate::metrics::Progress;
 use crate::nets::{ActorCritic, RunningNorm};
 use crate::obs::ObsScale;
+pub use crate::rollout::{Act, Transitions};
 use crate::run::resume::{read_checkpoint, ResumeState};
 use crate::run::{make_env, Run, TrainSummary};
 use crate::warm_start::{init_weights, SUPPORT_INIT_BIAS};
@@ -40,26 +47,27 @@ pub use naosoccer_policy::actions::{
     action_count, action_mask, sample, shoot_mask, DecisionConfig, NetAction, ACTIONS,
 };
 
-/// Trains a team-preset run into `out`, or goes on from `resume` (a
-/// checkpoint of the run in `out`) as if it had not stopped.
+/// Trains a PPO run into `out`, or goes on from `resume` (a checkpoint of
+/// a `team` run in `out`) as if it had not stopped.
 ///
 /// Every tick each learning robot either decides (a forward pass; its open
 /// transition closes with the new decision's value) or holds its action;
 /// an episode's end closes it with no bootstrap, a drill's cut and the
-/// rollout's edge with the critic's value of the state reached. A rollout
-/// also ends with the episodes (all matches have one length and end
-/// together): checkpoints fall on episode boundaries, where a resumed run
-/// can rebuild the matches exactly.
+/// rollout's edge with the critic's value of the state reached. In the
+/// per-tick presets (`paper`, `cleanrl`: no decision settings) every robot
+/// decides every tick and each decision closes at the tick's end, with the
+/// value of the state reached. A `team` rollout also ends with the
+/// episodes (all matches have one length and end together): its
+/// checkpoints fall on episode boundaries, where a resumed run can rebuild
+/// the matches exactly.
 pub fn train(
     cfg: &TrainConfig,
     out: &Path,
     resume: Option<ResumeState>,
     progress: &mut dyn FnMut(&Progress<'_>),
 ) -> Result<TrainSummary, LearnError> {
-    let decision = cfg
-        .ppo
-        .decision
-        .ok_or_else(|| LearnError::Config("no decision configuration".into()))?;
+    let decision = cfg.ppo.decision;
+    let per_tick = decision.is_none();
     let mut env = make_env(cfg)?;
     let scale = run_scale(cfg);
     let mut ppo = Ppo::new(cfg.ppo.clone(), &scale, cfg.learners.len())?;
@@ -71,7 +79,7 @@ pub fn train(
                 let support_bias = cfg.init_support_bias.unwrap_or(SUPPORT_INIT_BIAS);
                 init_weights(&mut ppo, from, pass_from, support_bias)?;
             }
-            Run::start(cfg, out, &mut env, &[&ppo.net.vs], true, progress)?
+            Run::start(cfg, out, &mut env, &[&ppo.net.vs], !per_tick, progress)?
         }
         Some(st) => {
             read_checkpoint(out, st, &mut ppo.net.vs, ppo.adam.as_mut())?;
@@ -90,12 +98,16 @@ pub fn train(
     let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
     let mut acts = Vec::new();
     let (mut cut_rows, mut cut_cobs, mut cut_val) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut boot, mut edge_cobs, mut edge_val) = (vec![0.0f32; rows], Vec::new(), vec![0.0; rows]);
+    let (mut boot, mut now_cobs, mut now_val) = (vec![0.0f32; rows], Vec::new(), vec![0.0; rows]);
     while !run.done() {
+        // A rollout's streams start afresh: its last transitions were cut
+        // by its edge, or (per tick) ended with its last tick.
         tr.clear();
+        link.fill(None);
         let mut ticks = 0usize;
         let mut boundary = false;
-        while ticks < cfg.ppo.rollout && !boundary {
+        // A `team` rollout also ends with the episodes.
+        while ticks < cfg.ppo.rollout && (per_tick || !boundary) {
             ticks += 1;
             let asked = dec.ask(&env);
             let k = asked.rows.len();
@@ -127,23 +139,34 @@ pub fn train(
             for (&r, &v) in cut_rows.iter().zip(&cut_val) {
                 boot[r] = v;
             }
+            if per_tick {
+                // Decisions of one tick end in the state reached.
+                dec.critic_rows(&env, &mut now_cobs);
+                ppo.critic_values(&now_cobs, &mut now_val);
+            }
             dec.observe(&env, &mut |c| match c.end {
                 End::Cut => tr.push(&c, boot[c.row], false, &mut link),
+                End::Tick => tr.push(&c, now_val[c.row], false, &mut link),
                 _ => tr.push(&c, 0.0, true, &mut link),
             });
             run.observe(env.rewards(), finished);
             boundary = env.dones().iter().all(|&d| d);
         }
         // The rollout's edge: open transitions end here, bootstrapped with
-        // the critic's value of the state they reached.
-        dec.critic_rows(&env, &mut edge_cobs);
-        ppo.critic_values(&edge_cobs, &mut edge_val);
-        dec.cut(&mut |c| tr.push(&c, edge_val[c.row], false, &mut link));
+        // the critic's value of the state they reached (none are open in
+        // the per-tick presets).
+        if !per_tick {
+            dec.critic_rows(&env, &mut now_cobs);
+            ppo.critic_values(&now_cobs, &mut now_val);
+            dec.cut(&mut |c| tr.push(&c, now_val[c.row], false, &mut link));
+        }
         let before = run.count(ticks * rows);
-        let stats = ppo.update_decisions(&tr, before as f64 / cfg.steps.max(1) as f64, &mut rng);
+        let stats = ppo.update(&tr, before as f64 / cfg.steps.max(1) as f64, &mut rng);
         run.log(&env, (stats.policy_loss, stats.value_loss, stats.entropy))?;
         run.refresh_opponents(before, &mut env, &[&ppo.net.vs])?;
-        if boundary && run.checkpoint_due() {
+        if per_tick && run.checkpoint_due() {
+            run.checkpoint(&[&ppo.net.vs])?;
+        } else if boundary && run.checkpoint_due() {
             let adam = ppo.adam.as_ref();
             run.checkpoint_resumable(&env, &rng, &ppo.net.vs, adam, ppo.value_norm)?;
         }
@@ -178,8 +201,8 @@ pub struct UpdateStats {
 pub struct Ppo {
     pub cfg: PpoConfig,
     pub net: ActorCritic,
-    /// The per-tick presets' optimiser ([`crate::ppo_paper`]).
-    pub(crate) opt: nn::Optimizer,
+    /// The per-tick presets' optimiser.
+    opt: nn::Optimizer,
     pub(crate) probs: Vec<f32>,
     /// Running statistics of the value targets (`value_norm`).
     pub value_norm: RunningNorm,
@@ -194,7 +217,7 @@ impl Ppo {
     /// robots per team.
     pub fn new(cfg: PpoConfig, scale: &ObsScale, learners: usize) -> Result<Ppo, LearnError> {
         let net = ActorCritic::for_run(&cfg, scale, learners);
-        let opt = crate::ppo_paper::optimiser(&cfg, &net.vs)?;
+        let opt = optimiser(&cfg, &net.vs)?;
         let adam = cfg.decision.is_some().then(|| {
             Adam::new(&net.vs, vec![cfg.lr_actor, cfg.lr_critic], 1e-5, |name| {
                 usize::from(!name.starts_with("actor"))
@@ -259,14 +282,15 @@ impl Ppo {
         }
     }
 
-    /// One PPO update on decision-level transitions. `progress` in [0, 1]
+    /// One PPO update on the rollout's transitions. `progress` in [0, 1]
     /// is how far the run is (learning-rate and entropy schedules).
-    pub fn update_decisions(
-        &mut self,
-        tr: &Transitions,
-        progress: f64,
-        rng: &mut ChaCha8Rng,
-    ) -> UpdateStats {
+    ///
+    /// The targets and advantages are GAE's (`team`, `cleanrl`) or, in the
+    /// paper's Algorithm 2 (`paper`), the discounted returns normalised over
+    /// the batch, with `A = R_norm - V(s)` taken afresh at every step. The
+    /// paper steps once over the whole batch per epoch; the others over
+    /// shuffled minibatches, each normalising its advantages.
+    pub fn update(&mut self, tr: &Transitions, progress: f64, rng: &mut ChaCha8Rng) -> UpdateStats {
         let n = tr.len();
         let mut stats = UpdateStats::default();
         if n == 0 {
@@ -274,10 +298,7 @@ impl Ppo {
         }
         let cfg = self.cfg.clone();
         let frac = progress.clamp(0.0, 1.0);
-        let Some(mut opt) = self.adam.take() else {
-            return stats;
-        };
-        if let Some(end) = cfg.lr_end_fraction {
+        if let (Some(end), Some(opt)) = (cfg.lr_end_fraction, self.adam.as_mut()) {
             let scale = 1.0 - (1.0 - end) * frac;
             opt.set_lr(0, cfg.lr_actor * scale);
             opt.set_lr(1, cfg.lr_critic * scale);
@@ -286,12 +307,19 @@ impl Ppo {
             Some(end) => cfg.entropy_coef + (end - cfg.entropy_coef) * frac,
             None => cfg.entropy_coef,
         };
-        let (adv, ret) = tr.gae(cfg.gamma as f32, cfg.gae_lambda as f32);
-        let targets: Vec<f32> = if cfg.value_norm {
-            self.value_norm.update(&ret);
-            ret.iter().map(|&r| self.value_norm.normalise(r)).collect()
+        let paper = cfg.preset == Preset::Paper;
+        let (adv, targets) = if paper {
+            let r = Tensor::from_slice(&tr.discounted_returns(cfg.gamma as f32));
+            (None, (&r - r.mean(Kind::Float)) / (r.std(true) + 1e-7))
         } else {
-            ret
+            let (adv, ret) = tr.gae(cfg.gamma as f32, cfg.gae_lambda as f32);
+            let targets: Vec<f32> = if cfg.value_norm {
+                self.value_norm.update(&ret);
+                ret.iter().map(|&r| self.value_norm.normalise(r)).collect()
+            } else {
+                ret
+            };
+            (Some(Tensor::from_slice(&adv)), Tensor::from_slice(&targets))
         };
         let obs = self.net.actor_input(&tr.obs, n);
         let cw = self.net.critic_dim;
@@ -301,21 +329,26 @@ impl Ppo {
         let k = cfg.actions();
         let mask = Tensor::from_slice(&action_mask(&tr.shoot_ok, &tr.banned, k))
             .view([n as i64, k as i64]);
-        let adv = Tensor::from_slice(&adv);
-        let targets = Tensor::from_slice(&targets);
-        let mb = n.div_ceil(cfg.minibatches.max(1));
+        let mb = if paper {
+            n
+        } else {
+            n.div_ceil(cfg.minibatches.max(1))
+        };
         let mut order: Vec<i64> = (0..n as i64).collect();
         let mut count = 0.0;
+        // The team's optimiser is ours (a checkpoint saves its state); the
+        // per-tick presets keep tch's.
+        let opt: &mut dyn Optimiser = match self.adam.as_mut() {
+            Some(adam) => adam,
+            None => &mut self.opt,
+        };
         'passes: for _ in 0..cfg.epochs {
-            shuffle(&mut order, rng);
+            if !paper {
+                shuffle(&mut order, rng);
+            }
             for chunk in order.chunks(mb) {
                 let idx = Tensor::from_slice(chunk);
-                let a = adv.index_select(0, &idx);
-                let a = if chunk.len() > 1 {
-                    (&a - a.mean(Kind::Float)) / (a.std(true) + 1e-8)
-                } else {
-                    a
-                };
+                let target = targets.index_select(0, &idx);
                 let logits =
                     self.net.logits(&obs.index_select(0, &idx)) + mask.index_select(0, &idx);
                 let logp_all = logits.log_softmax(-1, Kind::Float);
@@ -325,12 +358,21 @@ impl Ppo {
                 let entropy = -(logp_all.exp() * &logp_all)
                     .sum_dim_intlist(-1, false, Kind::Float)
                     .mean(Kind::Float);
+                let v = self.net.value(&cobs.index_select(0, &idx));
+                let a = match &adv {
+                    Some(adv) => {
+                        let a = adv.index_select(0, &idx);
+                        if chunk.len() > 1 {
+                            (&a - a.mean(Kind::Float)) / (a.std(true) + 1e-8)
+                        } else {
+                            a
+                        }
+                    }
+                    None => &target - v.detach(),
+                };
                 let old = logp_old.index_select(0, &idx);
                 let pl = clipped_surrogate_loss(&logp, &old, &a, cfg.clip);
-                let v = self.net.value(&cobs.index_select(0, &idx));
-                let vl = (&v - targets.index_select(0, &idx))
-                    .square()
-                    .mean(Kind::Float);
+                let vl = (&v - &target).square().mean(Kind::Float);
                 let loss = &pl + cfg.value_coef * &vl - ent_coef * &entropy;
                 opt.zero_grad();
                 loss.backward();
@@ -354,7 +396,6 @@ impl Ppo {
                 }
             }
         }
-        self.adam = Some(opt);
         if count > 0.0 {
             stats.policy_loss /= count;
             stats.value_loss /= count;
@@ -365,129 +406,54 @@ impl Ppo {
     }
 }
 
-pub(crate) fn accumulate(total: &mut UpdateStats, s: UpdateStats, count: &mut f64) {
-    total.policy_loss += s.policy_loss;
-    total.value_loss += s.value_loss;
-    total.entropy += s.entropy;
-    total.approx_kl += s.approx_kl;
-    *count += 1.0;
+/// What an update needs of an optimiser: ours ([`Adam`], the `team`
+/// preset's) or tch's (the per-tick presets').
+trait Optimiser {
+    fn zero_grad(&mut self);
+    fn clip_grad_norm(&mut self, max: f64);
+    fn step(&mut self);
 }
 
-/// Decision-level transitions: each spans the `dt` ticks from one decision
-/// of a robot to its next (or to the episode's end, or to the rollout's
-/// edge), in the order they closed.
-#[derive(Debug, Default, Clone)]
-pub struct Transitions {
-    /// Actor rows, `OBS_DIM` wide.
-    pub obs: Vec<f32>,
-    /// Critic rows, `critic_dim` wide.
-    pub critic_obs: Vec<f32>,
-    pub actions: Vec<i64>,
-    pub logp: Vec<f32>,
-    pub shoot_ok: Vec<bool>,
-    /// The actions banned beyond a `shoot` out of reach
-    /// ([`naosoccer_policy::actions::banned_actions`]; empty without the
-    /// `pass` action).
-    pub banned: Vec<ActionSet>,
-    /// V(s) at the decision, in return units.
-    pub values: Vec<f32>,
-    /// `sum_{i < dt} gamma^i r_i`: the rewards until the next decision.
-    pub rewards: Vec<f32>,
-    /// Ticks until the next decision.
-    pub dt: Vec<u32>,
-    /// The value after `dt` ticks: the next decision's V, the bootstrap V at
-    /// a rollout edge, 0 after the episode's end.
-    pub next_values: Vec<f32>,
-    pub dones: Vec<bool>,
-    /// The transition that follows this one in its robot's stream (the next
-    /// decision, in this rollout).
-    pub next: Vec<Option<usize>>,
+impl Optimiser for Adam {
+    fn zero_grad(&mut self) {
+        Adam::zero_grad(self);
+    }
+    fn clip_grad_norm(&mut self, max: f64) {
+        Adam::clip_grad_norm(self, max);
+    }
+    fn step(&mut self) {
+        Adam::step(self);
+    }
 }
 
-/// What PPO keeps of a decision until it closes: the action's
-/// log-probability and the critic's value where it was taken.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Act {
-    pub logp: f32,
-    pub value: f32,
+impl Optimiser for nn::Optimizer {
+    fn zero_grad(&mut self) {
+        nn::Optimizer::zero_grad(self);
+    }
+    fn clip_grad_norm(&mut self, max: f64) {
+        nn::Optimizer::clip_grad_norm(self, max);
+    }
+    fn step(&mut self) {
+        nn::Optimizer::step(self);
+    }
 }
 
-impl Transitions {
-    /// Stores a closed decision with the value after it (`next_value`) and
-    /// whether its episode ended there. `link` holds each robot's last
-    /// transition while its stream goes on (it ended in the next decision):
-    /// this one becomes that one's successor.
-    pub fn push(
-        &mut self,
-        c: &Closed<'_, Act>,
-        next_value: f32,
-        done: bool,
-        link: &mut [Option<usize>],
-    ) {
-        let i = self.len();
-        self.obs.extend_from_slice(c.obs);
-        self.critic_obs.extend_from_slice(c.critic_obs);
-        self.actions.push(c.action as i64);
-        self.logp.push(c.payload.logp);
-        self.shoot_ok.push(c.shoot_ok);
-        self.banned.push(c.banned);
-        self.values.push(c.payload.value);
-        self.rewards.push(c.reward);
-        self.dt.push(c.ticks.max(1));
-        self.next_values.push(next_value);
-        self.dones.push(done);
-        self.next.push(None);
-        if let Some(j) = link[c.row].take() {
-            self.next[j] = Some(i);
-        }
-        if matches!(c.end, End::Decided { .. }) {
-            link[c.row] = Some(i);
-        }
+/// The per-tick presets' optimiser: tch's Adam with the actor's and the
+/// critic's learning rates (and CleanRL's epsilon for `cleanrl`).
+fn optimiser(cfg: &PpoConfig, vs: &nn::VarStore) -> Result<nn::Optimizer, LearnError> {
+    let eps = if cfg.preset == Preset::Cleanrl {
+        1e-5
+    } else {
+        1e-8
+    };
+    let mut opt = nn::Adam {
+        eps,
+        ..Default::default()
     }
-
-    pub fn len(&self) -> usize {
-        self.actions.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.actions.is_empty()
-    }
-
-    pub fn clear(&mut self) {
-        self.obs.clear();
-        self.critic_obs.clear();
-        self.actions.clear();
-        self.logp.clear();
-        self.shoot_ok.clear();
-        self.banned.clear();
-        self.values.clear();
-        self.rewards.clear();
-        self.dt.clear();
-        self.next_values.clear();
-        self.dones.clear();
-        self.next.clear();
-    }
-
-    /// GAE over time-discounted transitions: `delta = R + gamma^dt V' (1 -
-    /// done) - V`, `A = delta + (gamma lambda)^dt A_next` along each robot's
-    /// chain of decisions. Returns `(advantages, returns = A + V)`.
-    pub fn gae(&self, gamma: f32, lambda: f32) -> (Vec<f32>, Vec<f32>) {
-        let n = self.len();
-        let mut adv = vec![0.0f32; n];
-        for i in (0..n).rev() {
-            let dt = self.dt[i] as i32;
-            let g = gamma.powi(dt);
-            let live = if self.dones[i] { 0.0 } else { 1.0 };
-            let delta = self.rewards[i] + g * self.next_values[i] * live - self.values[i];
-            let tail = match self.next[i] {
-                Some(j) if !self.dones[i] => (gamma * lambda).powi(dt) * adv[j],
-                _ => 0.0,
-            };
-            adv[i] = delta + tail;
-        }
-        let ret = adv.iter().zip(&self.values).map(|(a, v)| a + v).collect();
-        (adv, ret)
-    }
+    .build(vs, cfg.lr_actor)?;
+    opt.set_lr_group(0, cfg.lr_actor);
+    opt.set_lr_group(1, cfg.lr_critic);
+    Ok(opt)
 }
 
 /// Fisher-Yates with our own RNG, so minibatches repeat with the seed.

@@ -1,14 +1,14 @@
 //! The front door: a run's configuration in, the learner that trains it
 //! out. Each learner is one file with its loop ([`crate::ppo`],
-//! [`crate::ppo_paper`], [`crate::dqn`], [`crate::dqn_paper`]) and drives
-//! the run harness ([`crate::run`]).
+//! [`crate::dqn`]), runs every preset of its algorithm and drives the run
+//! harness ([`crate::run`]).
 
 use std::path::Path;
 
 use crate::metrics::Progress;
 use crate::run::resume::resume_point;
 use crate::run::TrainSummary;
-use crate::{dqn, dqn_paper, ppo, ppo_paper, LearnError};
+use crate::{dqn, ppo, LearnError};
 
 // The configuration and the self-play snapshot live where the modules that
 // read them can reach them without importing the learners; these are their
@@ -25,12 +25,11 @@ pub fn train(
 ) -> Result<TrainSummary, LearnError> {
     tch::manual_seed(cfg.seed as i64);
     match cfg.algo {
-        // The decision-level MDP (`--preset team`), or every robot acting
-        // every tick (the paper's presets, and PPO's `cleanrl`).
-        Algo::Ppo if cfg.ppo.decision.is_some() => ppo::train(cfg, out, None, progress),
-        Algo::Ppo => ppo_paper::train(cfg, out, progress),
-        Algo::Dqn if cfg.dqn.decision.is_some() => dqn::train(cfg, out, progress),
-        Algo::Dqn => dqn_paper::train(cfg, out, progress),
+        // Each on the decision-level MDP: robots deciding when free to act
+        // (`--preset team`), or every robot every tick (the paper's
+        // presets, and PPO's `cleanrl`).
+        Algo::Ppo => ppo::train(cfg, out, None, progress),
+        Algo::Dqn => dqn::train(cfg, out, progress),
     }
 }
 

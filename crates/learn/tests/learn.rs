@@ -1355,7 +1355,7 @@ fn scenarios_play_episodes_and_cut_at_a_match_s_end() {
     }
     let mut decisions: Decisions<()> = Decisions::new(
         &env,
-        DecisionConfig::team(),
+        Some(DecisionConfig::team()),
         ObsScale::from_config(&cfg),
         0,
         0.99,
@@ -1780,4 +1780,70 @@ fn decision_settings_without_their_prerequisites_are_refused() {
     cfg.init_from = Some(dir.join("final.safetensors"));
     let err = train(&cfg, &dir, &mut |_| {}).unwrap_err().to_string();
     assert!(err.contains("--init-from") && err.contains("DQN"), "{err}");
+}
+
+/// Without decision settings (the per-tick presets) every learning robot
+/// decides every tick, busy or not, unmasked, and each decision closes at
+/// that tick's end: one tick long, its reward the tick's, ending in the
+/// state reached, or with the episode.
+#[test]
+fn without_decision_settings_every_robot_decides_every_tick() {
+    use naosoccer_learn::env::decisions::{Decisions, End};
+    use naosoccer_policy::obs::ObsScale;
+
+    let cfg = MatchConfig {
+        minutes: 0.05,
+        ..MatchConfig::default()
+    };
+    let mut env = VecEnv::new(
+        &cfg,
+        EnvConfig {
+            matches: 2,
+            learners: vec![0, 1, 2, 3],
+            teammates: PolicyKind::Idle,
+            threads: 1,
+            seed: 5,
+            support_spot: Default::default(),
+        },
+        Opponent::Builtin(PolicyKind::Scripted),
+    )
+    .unwrap();
+    let rows = env.rows();
+    let mut dec: Decisions<u64> = Decisions::new(&env, None, ObsScale::from_config(&cfg), 0, 0.9);
+    let (mut ticks, mut ended) = (0u64, 0usize);
+    while ended == 0 {
+        let asked = dec.ask(&env);
+        assert_eq!(asked.rows, (0..rows).collect::<Vec<_>>(), "tick {ticks}");
+        assert!(asked.shoot_ok.iter().all(|&ok| ok));
+        assert!(asked.banned.iter().all(|&b| b == 0), "nothing banned");
+        // Shoot, whoever is in reach: nothing is masked or held.
+        let actions = vec![4usize; rows];
+        let stamps = vec![ticks; rows];
+        dec.decide(&env, &actions, &stamps, &mut |_| {
+            panic!("no decision is open when the next tick's are taken")
+        });
+        assert_eq!(dec.actions(), &actions[..]);
+        env.step(dec.actions()).unwrap();
+        let mut closed = Vec::new();
+        dec.observe(&env, &mut |c| {
+            closed.push((c.row, c.end, c.ticks, c.reward, c.discount, c.payload))
+        });
+        assert_eq!(
+            closed.len(),
+            rows,
+            "every decision closes at its tick's end"
+        );
+        for (r, end, n, reward, discount, stamp) in closed {
+            assert_eq!((n, discount, stamp), (1, 0.9, ticks));
+            assert_eq!(reward, env.rewards()[r]);
+            if env.dones()[r] {
+                assert_eq!(end, End::Ended);
+                ended += 1;
+            } else {
+                assert_eq!(end, End::Tick);
+            }
+        }
+        ticks += 1;
+    }
+    assert_eq!((ended, ticks), (rows, 30));
 }

@@ -2,7 +2,10 @@
 //! actions and keeps decisions open.
 //!
 //! Each control tick, a learning robot either decides (it is free to act
-//! and its last decision has run out, [`Hold`]) or holds its action. A
+//! and its last decision has run out, [`Hold`]) or holds its action. With
+//! no decision settings (the per-tick presets: the paper's and CleanRL's)
+//! every robot decides every tick, busy or not, with no mask: each
+//! decision lasts one tick and closes at the tick's end ([`End::Tick`]). A
 //! decision stays open while it is held: its rewards accumulate, discounted
 //! per tick (`sum gamma^i r_i`, and `gamma^ticks`). It closes, and comes out
 //! as one [`Closed`] transition, when the robot next decides, when its
@@ -48,6 +51,10 @@ pub enum End {
     /// A rollout's edge ([`Decisions::cut`]): the next state is the robot's
     /// current observation.
     Edge,
+    /// Without decision settings, a decision lasts one tick: it closes at
+    /// the tick's end ([`Decisions::observe`]) and the next state is the
+    /// robot's current observation, where it decides next.
+    Tick,
 }
 
 /// A closed decision: one decision-level transition.
@@ -91,7 +98,8 @@ pub struct Asked {
 /// Holds and open decisions of every learning robot of a [`VecEnv`];
 /// `P` is what the learner keeps with each decision until it closes.
 pub struct Decisions<P> {
-    decision: DecisionConfig,
+    /// `None`: every robot decides every tick, unmasked.
+    decision: Option<DecisionConfig>,
     scale: ObsScale,
     learners: usize,
     critic_width: usize,
@@ -105,12 +113,12 @@ pub struct Decisions<P> {
 }
 
 impl<P: Copy> Decisions<P> {
-    /// For `env`'s robots under `decision`, rewards discounted by `gamma`
-    /// per tick. `critic_width`: the critic's input ([`critic_row`]), 0 when
+    /// For `env`'s robots under `decision` (`None`: each decides every
+    /// tick), rewards discounted by `gamma` per tick. `critic_width`: the critic's input ([`critic_row`]), 0 when
     /// the learner has no critic.
     pub fn new(
         env: &VecEnv,
-        decision: DecisionConfig,
+        decision: Option<DecisionConfig>,
         scale: ObsScale,
         critic_width: usize,
         gamma: f32,
@@ -148,24 +156,32 @@ impl<P: Copy> Decisions<P> {
                 self.actions[r] = NetAction::Stay.index();
                 continue;
             }
-            if hold.must_decide(o) {
-                a.rows.push(r);
-                a.obs
-                    .extend_from_slice(&env.observations()[r * OBS_DIM..(r + 1) * OBS_DIM]);
-                critic_row(
-                    env.observations(),
-                    self.learners,
-                    r,
-                    dim,
-                    self.critic_width,
-                    &mut a.critic_obs,
-                );
-                let in_reach = self.scale.kick.in_reach(o);
-                a.shoot_ok.push(!self.decision.mask_shoot || in_reach);
-                a.banned.push(banned_actions(o, in_reach, &self.decision));
-            } else {
+            // What it may choose, if it decides now: every tick and
+            // unmasked without decision settings.
+            let masks = match &self.decision {
+                None => Some((true, ActionSet::default())),
+                Some(d) => hold.must_decide(o).then(|| {
+                    let in_reach = self.scale.kick.in_reach(o);
+                    (!d.mask_shoot || in_reach, banned_actions(o, in_reach, d))
+                }),
+            };
+            let Some((shoot_ok, banned)) = masks else {
                 self.actions[r] = hold.held(o).index();
-            }
+                continue;
+            };
+            a.rows.push(r);
+            a.obs
+                .extend_from_slice(&env.observations()[r * OBS_DIM..(r + 1) * OBS_DIM]);
+            critic_row(
+                env.observations(),
+                self.learners,
+                r,
+                dim,
+                self.critic_width,
+                &mut a.critic_obs,
+            );
+            a.shoot_ok.push(shoot_ok);
+            a.banned.push(banned);
         }
         &self.asked
     }
@@ -207,9 +223,11 @@ impl<P: Copy> Decisions<P> {
             self.open_obs[r * w..(r + 1) * w].copy_from_slice(&self.asked.obs[j * w..(j + 1) * w]);
             self.open_critic[r * cw..(r + 1) * cw]
                 .copy_from_slice(&self.asked.critic_obs[j * cw..(j + 1) * cw]);
-            let tick = env.learner_observation(r).tick;
-            let a = NetAction::from_index(actions[j]).expect("a network output is an action");
-            self.holds[r].start(a, tick, &self.decision, half);
+            if let Some(decision) = &self.decision {
+                let tick = env.learner_observation(r).tick;
+                let a = NetAction::from_index(actions[j]).expect("a network output is an action");
+                self.holds[r].start(a, tick, decision, half);
+            }
             self.actions[r] = actions[j];
         }
     }
@@ -221,7 +239,9 @@ impl<P: Copy> Decisions<P> {
 
     /// After [`VecEnv::step`]: the tick's rewards go into the open
     /// decisions; those of episodes that ended close (to `emit`, in row
-    /// order) and their robots' holds start afresh.
+    /// order) and their robots' holds start afresh. Without decision
+    /// settings every decision closes here ([`End::Tick`] where the episode
+    /// goes on).
     pub fn observe(&mut self, env: &VecEnv, emit: &mut dyn FnMut(Closed<'_, P>)) {
         let cw = self.critic_width;
         for r in 0..self.open.len() {
@@ -240,6 +260,17 @@ impl<P: Copy> Decisions<P> {
                     emit(closed(r, &d, &self.open_obs, &self.open_critic, cw, end));
                 }
                 self.holds[r].reset();
+            } else if self.decision.is_none() {
+                if let Some(d) = self.open[r].take() {
+                    emit(closed(
+                        r,
+                        &d,
+                        &self.open_obs,
+                        &self.open_critic,
+                        cw,
+                        End::Tick,
+                    ));
+                }
             }
         }
     }

@@ -1,6 +1,5 @@
 use super::*;
 use crate::obs::OBS_DIM;
-use crate::ppo_paper::gae;
 use rand::SeedableRng;
 
 fn vals(t: &Tensor) -> Vec<f32> {
@@ -100,8 +99,30 @@ fn decision_gae_discounts_by_elapsed_ticks() {
         ..two_streams()
     };
     let (adv, _) = per_tick.gae(g, l);
-    let (ref_adv, _) = gae(&[0.3, 0.2], &[1.0, 2.0], &[0.0, 0.0], &[4.0], g, l);
-    assert!(close(adv[0], ref_adv[0]) && close(adv[1], ref_adv[1]));
+    let t1 = 0.2 + g * 4.0 - 2.0;
+    let t0 = 0.3 + g * 2.0 - 1.0 + g * l * t1;
+    assert!(close(adv[0], t0) && close(adv[1], t1), "{adv:?}");
+}
+
+#[test]
+fn the_papers_returns_are_discounted_along_each_robots_stream() {
+    // One-tick transitions of two robots, time-major: A at 0, 2, 4; B at
+    // 1, 3, 5; B's episode ends after its second, A's stream runs into
+    // the rollout's edge.
+    let tr = Transitions {
+        actions: vec![0; 6],
+        rewards: vec![1.0, 0.0, 1.0, 1.0, 1.0, 1.0],
+        dt: vec![1; 6],
+        dones: vec![false, false, false, true, false, false],
+        next: vec![Some(2), Some(3), Some(4), None, None, None],
+        ..Transitions::default()
+    };
+    // A: 1 + 0.5 (1 + 0.5 * 1) = 1.75, 1.5, 1 (no bootstrap at the edge);
+    // B: 0 + 0.5 * 1 = 0.5, 1 (its episode ended), 1.
+    assert_eq!(
+        tr.discounted_returns(0.5),
+        vec![1.75, 0.5, 1.5, 1.0, 1.0, 1.0]
+    );
 }
 
 #[test]
