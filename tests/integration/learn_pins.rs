@@ -181,7 +181,8 @@ const PPO_CLEANRL: &[&str] = &[
     "30000",
 ];
 
-const PPO_CLEANRL_METRICS: &str = "4424e40d1395dec3678bb530aec8cbb5225b02713053a3075945b80a3376ff6c";
+const PPO_CLEANRL_METRICS: &str =
+    "4424e40d1395dec3678bb530aec8cbb5225b02713053a3075945b80a3376ff6c";
 const PPO_CLEANRL_FINAL: &str = "513efcdeb1e174fb4da6ae384b239782c626f7c2564a341c6592b0bd31f9d76f";
 
 /// The paper's DQN (`--preset paper`, Algorithm 1: every robot deciding
