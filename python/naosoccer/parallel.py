@@ -29,8 +29,9 @@ from .vector import ACTION_NAMES, ScenarioArg, _require_native, _scenario_args, 
 TEAM_OBS_VERSION = 3
 
 #: The decision settings (action set and masks) of the shipped ``ppo-team``
-#: teams: seven actions (``pass`` and ``support`` after the paper's five),
-#: ``shoot`` masked out of kick reach, two chasers. The envs' default.
+#: teams: nine actions (``pass``, ``support``, ``approach`` and ``defend``
+#: after the paper's five), ``shoot`` masked out of kick reach, two chasers.
+#: The envs' default.
 TEAM_DECISION: Mapping[str, Any] = types.MappingProxyType({
     "persist": 3,
     "mask_shoot": True,
@@ -39,6 +40,8 @@ TEAM_DECISION: Mapping[str, Any] = types.MappingProxyType({
     "support_hold": 60,
     "chasers": 2,
     "support_spot": "facing",
+    "approach": True,
+    "defend": True,
 })
 
 _TEAMS = ("blue", "red", "both")

@@ -81,14 +81,15 @@ def test_defaults_are_the_shipped_teams():
     version, decision = team_layout(TEAM)
     assert env.obs_version == version == naosoccer.TEAM_OBS_VERSION == 3
     assert env.decision == decision == dict(naosoccer.TEAM_DECISION)
-    assert env.num_actions == 7 and env.action_names[-2:] == ("pass", "support")
+    assert env.num_actions == 9
+    assert env.action_names[-4:] == ("pass", "support", "approach", "defend")
     assert env.opponent == "scripted" and env.render_mode is None
     assert env.possible_agents == ["blue_0", "blue_1", "blue_2", "blue_3"]
     assert env.metadata["render_modes"] == ["rgb_array"]
     obs, infos = env.reset(seed=1)
     assert env.observation_space("blue_0").shape == (89,) and obs["blue_0"].shape == (89,)
     assert obs["blue_0"].dtype == np.float32
-    assert env.action_space("blue_2").n == 7
+    assert env.action_space("blue_2").n == 9
     assert infos["blue_0"]["action_mask"].dtype == np.int8
     # `like` gives a team's layout; explicit arguments win.
     like = naosoccer.parallel_env(like="assets/policies/dqn-team-seed1")
@@ -309,8 +310,8 @@ def test_mistakes_are_refused():
     with pytest.raises(RuntimeError, match="reset"):
         env.step({})
     env.reset(seed=0)
-    with pytest.raises(ValueError, match="not one of the 7 actions"):
-        env.step({"blue_0": 7})
+    with pytest.raises(ValueError, match="not one of the 9 actions"):
+        env.step({"blue_0": 9})
     with pytest.raises(ValueError, match="not in play"):
         env.step({"red_0": 0})
     with pytest.raises(ValueError, match="integer"):
@@ -322,4 +323,4 @@ def test_mistakes_are_refused():
     aec = naosoccer.env(minutes=0.1)
     aec.reset(seed=0)
     with pytest.raises(AssertionError):
-        aec.step(7)
+        aec.step(9)

@@ -179,8 +179,9 @@ def test_threads_end_with_the_env():
 
 def test_masks_follow_a_shipped_teams_actions():
     env = VectorEnv(2, like=TEAM, opponent="idle", minutes=0.1, seed=2)
-    assert env.obs_version == 3 and env.num_actions == 7
-    assert env.action_names == ("forward", "turn_left", "turn_right", "shoot", "stay", "pass", "support")
+    assert env.obs_version == 3 and env.num_actions == 9
+    assert env.action_names == ("forward", "turn_left", "turn_right", "shoot", "stay", "pass", "support",
+                                "approach", "defend")
     obs, infos = env.reset()
     assert obs.shape == (2, 4, 89)
     mask = infos["action_mask"]

@@ -791,7 +791,8 @@ fn physics_is_plausible_over_matches_16_to_20() {
 
 /// The matches issue 39's audit found the faults in, as `naosoccer match
 /// --seed N` plays them with the default config: seeds 1-12 scripted
-/// against scripted, 18-20 `ppo:assets/policies/ppo-team-seed1` (blue)
+/// against scripted, 18-20 `ppo:assets/policies/ppo-team-v4-seed1` (blue,
+/// shipped as `ppo-team-seed1` when the audit was made)
 /// against scripted, 23 `dqn:assets/policies/dqn-team-seed1` against
 /// `random`. Before the fixes: robots stood on others (seed 7 tick 726,
 /// 12.5 cm for 5.2 s; seeds 4, 6, 11), rollers crossed (seed 18 tick 4138),
@@ -812,7 +813,7 @@ fn issue_39_the_audited_matches_are_plausible() {
             }
         };
         let (blue, red) = match seed {
-            18..=20 => ("ppo:assets/policies/ppo-team-seed1", "scripted"),
+            18..=20 => ("ppo:assets/policies/ppo-team-v4-seed1", "scripted"),
             23 => ("dqn:assets/policies/dqn-team-seed1", "random"),
             _ => ("scripted", "scripted"),
         };
