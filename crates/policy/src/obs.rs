@@ -396,16 +396,20 @@ mod tests {
     use naosoccer_proto::Tick;
     use naosoccer_proto::{BallObs, ScoreObs, Team};
 
-    /// An observation-layout table of docs/LEARNING.md: rows `| index | name | ... |`
+    /// The guide, where the layouts in use are documented.
+    const GUIDE: &str = include_str!("../../../docs/LEARNING.md");
+    /// The paper-era layout (version 1), documented with the paper's reproduction.
+    const PAPER: &str = include_str!("../../../docs/experiments/2026-11-22-paper-reproduction.md");
+
+    /// An observation-layout table of a document: rows `| index | name | ... |`
     /// between the markers `<!-- TAG:begin -->` and `<!-- TAG:end -->`.
-    fn documented_layout(tag: &str) -> Vec<(usize, String)> {
-        let doc = include_str!("../../../docs/LEARNING.md");
+    fn documented_layout(doc: &str, tag: &str) -> Vec<(usize, String)> {
         let start = doc
             .find(&format!("<!-- {tag}:begin -->"))
-            .expect("layout start marker in docs/LEARNING.md");
+            .expect("layout start marker in the document");
         let end = doc
             .find(&format!("<!-- {tag}:end -->"))
-            .expect("layout end marker in docs/LEARNING.md");
+            .expect("layout end marker in the document");
         doc[start..end]
             .lines()
             .filter_map(|l| {
@@ -418,16 +422,21 @@ mod tests {
 
     #[test]
     fn layouts_match_their_documentation() {
-        for (tag, names, first) in [
-            ("obs-layout", &FEATURE_NAMES[..], 0),
-            ("obs-layout-v1", &FEATURE_NAMES_V1[..], 0),
-            ("obs-layout-v3", &FEATURE_NAMES_V3_TAIL[..], OBS_DIM_V2),
+        for (doc, tag, names, first) in [
+            (GUIDE, "obs-layout", &FEATURE_NAMES[..], 0),
+            (PAPER, "obs-layout-v1", &FEATURE_NAMES_V1[..], 0),
+            (
+                GUIDE,
+                "obs-layout-v3",
+                &FEATURE_NAMES_V3_TAIL[..],
+                OBS_DIM_V2,
+            ),
         ] {
-            let doc = documented_layout(tag);
+            let doc = documented_layout(doc, tag);
             assert_eq!(
                 doc.len(),
                 names.len(),
-                "docs/LEARNING.md lists every entry of {tag} once"
+                "the documentation lists every entry of {tag} once"
             );
             for (i, (index, name)) in doc.iter().enumerate() {
                 assert_eq!(*index, first + i, "{tag}: entries in order");
@@ -436,9 +445,8 @@ mod tests {
         }
         assert_eq!(layout_dim(OBS_VERSION), Some(OBS_DIM_V2));
         assert_eq!(layout_dim(OBS_VERSION_LATEST), Some(OBS_DIM));
-        let doc = include_str!("../../../docs/LEARNING.md");
         assert!(
-            doc.contains(&format!("version {OBS_VERSION}")),
+            GUIDE.contains(&format!("version {OBS_VERSION}")),
             "docs name the layout version"
         );
     }
