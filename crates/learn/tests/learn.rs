@@ -1080,8 +1080,10 @@ fn recorded_observations(matches: u64) -> Vec<naosoccer_proto::Observation> {
 
 /// Issue 14: the torch-free forward pass (`naosoccer-policy`, what every
 /// trained team plays with) against tch's, for every shipped team over
-/// thousands of recorded observations: the outputs agree to 1e-5, and the
-/// greedy and the sampled actions (the same draws) are the same. tch runs
+/// thousands of recorded observations: the outputs agree to 1e-5, or to a
+/// millionth of the largest output where that is larger (f32 rounding grows
+/// with the outputs' size: the three-stage teams' logits reach tens), and
+/// the greedy and the sampled actions (the same draws) are the same. tch runs
 /// the whole set as one batch and again four rows (a team) at a time.
 #[test]
 fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
@@ -1159,7 +1161,7 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
             v
         };
         let players = if nets.len() > 1 { nets.len() } else { 1 };
-        let mut worst = 0.0f32;
+        let (mut worst, mut largest) = (0.0f32, 0.0f32);
         for player in 0..players {
             let net = if nets.len() > 1 { player } else { 0 };
             let want_player = cfg.learners.get(player).copied().unwrap_or(0);
@@ -1172,6 +1174,7 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
             for theirs in [&whole, &teams] {
                 for (x, y) in ours.iter().zip(theirs.iter()) {
                     worst = worst.max((x - y).abs());
+                    largest = largest.max(y.abs());
                 }
                 // Greedy: the largest (allowed) output.
                 for i in 0..n {
@@ -1211,10 +1214,13 @@ fn issue_14_the_torch_free_forward_matches_tch_on_the_shipped_teams() {
                 }
             }
         }
-        eprintln!("{spec}: {n} observations, largest difference from tch {worst:e}");
+        eprintln!(
+            "{spec}: {n} observations, largest difference from tch {worst:e}, largest output {largest}"
+        );
+        let bound = 1e-5f32.max(1e-6 * largest);
         assert!(
-            worst <= 1e-5,
-            "{spec}: outputs differ from tch's by {worst}"
+            worst <= bound,
+            "{spec}: outputs differ from tch's by {worst} (bound {bound})"
         );
     }
 }
