@@ -203,14 +203,13 @@ impl<P: Copy> Decisions<P> {
     ) {
         let half = [self.scale.half_length, self.scale.half_width];
         let (w, cw) = (OBS_DIM, self.critic_width);
-        for (j, &r) in self.asked.rows.iter().enumerate() {
+        for j in 0..self.asked.rows.len() {
+            let r = self.asked.rows[j];
             let end = End::Decided {
                 next: j,
                 shoot_ok: self.asked.shoot_ok[j],
             };
-            if let Some(d) = self.open[r].take() {
-                emit(closed(r, &d, &self.open_obs, &self.open_critic, cw, end));
-            }
+            self.close(r, end, emit);
             self.open[r] = Some(Open {
                 action: actions[j],
                 shoot_ok: self.asked.shoot_ok[j],
@@ -243,7 +242,6 @@ impl<P: Copy> Decisions<P> {
     /// settings every decision closes here ([`End::Tick`] where the episode
     /// goes on).
     pub fn observe(&mut self, env: &VecEnv, emit: &mut dyn FnMut(Closed<'_, P>)) {
-        let cw = self.critic_width;
         for r in 0..self.open.len() {
             if let Some(d) = self.open[r].as_mut() {
                 d.reward += d.discount * env.rewards()[r];
@@ -251,26 +249,15 @@ impl<P: Copy> Decisions<P> {
                 d.ticks += 1;
             }
             if env.dones()[r] {
-                if let Some(d) = self.open[r].take() {
-                    let end = if env.truncated()[r] {
-                        End::Cut
-                    } else {
-                        End::Ended
-                    };
-                    emit(closed(r, &d, &self.open_obs, &self.open_critic, cw, end));
-                }
+                let end = if env.truncated()[r] {
+                    End::Cut
+                } else {
+                    End::Ended
+                };
+                self.close(r, end, emit);
                 self.holds[r].reset();
             } else if self.decision.is_none() {
-                if let Some(d) = self.open[r].take() {
-                    emit(closed(
-                        r,
-                        &d,
-                        &self.open_obs,
-                        &self.open_critic,
-                        cw,
-                        End::Tick,
-                    ));
-                }
+                self.close(r, End::Tick, emit);
             }
         }
     }
@@ -301,18 +288,16 @@ impl<P: Copy> Decisions<P> {
     /// A rollout's edge: every open decision closes (to `emit`, in row
     /// order); the robots go on holding their actions.
     pub fn cut(&mut self, emit: &mut dyn FnMut(Closed<'_, P>)) {
-        let cw = self.critic_width;
         for r in 0..self.open.len() {
-            if let Some(d) = self.open[r].take() {
-                emit(closed(
-                    r,
-                    &d,
-                    &self.open_obs,
-                    &self.open_critic,
-                    cw,
-                    End::Edge,
-                ));
-            }
+            self.close(r, End::Edge, emit);
+        }
+    }
+
+    /// Closes row `r`'s open decision, if any, as `end` (to `emit`).
+    fn close(&mut self, r: usize, end: End, emit: &mut dyn FnMut(Closed<'_, P>)) {
+        if let Some(d) = self.open[r].take() {
+            let cw = self.critic_width;
+            emit(closed(r, &d, &self.open_obs, &self.open_critic, cw, end));
         }
     }
 }
