@@ -105,7 +105,11 @@ impl Scripted {
     fn field_player(&mut self, obs: &Observation) -> Action {
         let me_idx = obs.player.index();
         let ball = self.team_ball(obs);
-        let engager = engager(obs, ball);
+        let engager = if self.p.engage_path > 0.0 || self.p.engage_turn > 0.0 {
+            self.engager_by_way(obs, ball)
+        } else {
+            engager(obs, ball)
+        };
         if engager == Some(me_idx) {
             return self.engage(obs, false);
         }
@@ -232,6 +236,61 @@ impl Scripted {
             sub(ball, scale(u, p.behind))
         };
         self.go_to(me, target)
+    }
+
+    /// The field player that goes for the ball (`engage_path`,
+    /// `engage_turn`): the one in control, else the standing one with the
+    /// shortest way to a kick toward the goal (lower number on a tie).
+    fn engager_by_way(&self, obs: &Observation, ball: [f32; 2]) -> Option<usize> {
+        if let Some(i) = (1..PLAYERS_PER_TEAM).find(|&i| obs.control[i]) {
+            return Some(i);
+        }
+        (1..PLAYERS_PER_TEAM)
+            .filter(|&i| !obs.own[i].fallen)
+            .map(|i| (self.way_to_kick(obs, &obs.own[i], ball), i))
+            .fold(None, |best: Option<(f32, usize)>, c| match best {
+                Some(b) if b.0 <= c.0 => Some(b),
+                _ => Some(c),
+            })
+            .map(|(_, i)| i)
+    }
+
+    /// How far `r` has to go to kick `ball` toward the goal: straight to
+    /// it when it is lined up (as `engage` decides), else round behind it;
+    /// mixed with the straight distance by `engage_path`, plus
+    /// `engage_turn` per radian of turning toward its first waypoint.
+    fn way_to_kick(&self, obs: &Observation, r: &RobotObs, ball: [f32; 2]) -> f32 {
+        let p = &self.p;
+        let pos = [r.x, r.y];
+        let goal = [p.half_length, self.aim_y(obs)];
+        let to_goal = sub(goal, ball);
+        let u = scale(to_goal, 1.0 / norm(to_goal).max(1e-6));
+        let to_ball = sub(ball, pos);
+        let d = norm(to_ball);
+        let ball_dir = to_ball[1].atan2(to_ball[0]);
+        let line = to_goal[1].atan2(to_goal[0]);
+        let lined_up = wrap(ball_dir - line).abs();
+        let (path, first) =
+            if lined_up < p.align_tolerance || (d < 0.25 && lined_up < 2.0 * p.align_tolerance) {
+                (d, ball)
+            } else {
+                let behind = sub(ball, scale(u, p.behind));
+                let rel = sub(pos, ball);
+                let along = dot(rel, u);
+                let across = cross(u, rel);
+                if along > -0.15 && across.abs() < 0.45 {
+                    // The ball is in the way: round it first.
+                    let side = if across >= 0.0 { 1.0 } else { -1.0 };
+                    let perp = [-u[1] * side, u[0] * side];
+                    let wide = add(ball, add(scale(perp, 0.5), scale(u, -0.15)));
+                    (dist(pos, wide) + dist(wide, behind) + p.behind, wide)
+                } else {
+                    (dist(pos, behind) + p.behind, behind)
+                }
+            };
+        let to_first = sub(first, pos);
+        let turn = wrap(to_first[1].atan2(to_first[0]) - r.heading).abs();
+        d + p.engage_path * (path - d) + p.engage_turn * turn
     }
 
     /// Where the ball will be `t` seconds from now if nothing touches it:
@@ -699,6 +758,27 @@ mod tests {
             assert_eq!(std::fs::read_to_string(&path).unwrap(), *text, "{path}");
             assert_eq!(ScriptedParams::parse_spec(&path).unwrap(), levels[i]);
         }
+        // The first ladder's levels 4 and 5 (which the shipped PPO recipe
+        // trains against) are today's without who-goes-for-the-ball and
+        // the tighter line-up.
+        let v1 = |n: u8| {
+            ScriptedParams::parse_spec(&format!(
+                "{}/../../assets/scripted/ladder-v1/level-{n}.toml",
+                env!("CARGO_MANIFEST_DIR")
+            ))
+            .unwrap()
+        };
+        let off = ScriptedParams::default();
+        let without = |p: ScriptedParams| ScriptedParams {
+            engage_path: off.engage_path,
+            engage_turn: off.engage_turn,
+            align_tolerance: off.align_tolerance,
+            ..p
+        };
+        assert_eq!(v1(4), without(levels[3]));
+        assert_eq!(v1(5), without(levels[4]));
+        assert_ne!(v1(4), levels[3]);
+        assert_ne!(v1(5), levels[4]);
         let five = ScriptedParams::parse_spec("5,b_shoot=0.3").unwrap();
         assert_eq!(
             five,
@@ -714,6 +794,38 @@ mod tests {
         assert!(ScriptedParams::parse_spec("6")
             .unwrap_err()
             .contains("the levels are 1 to 5"));
+    }
+
+    /// `engage_path`: the field player with the shortest way to a kick
+    /// toward the goal goes for the ball, not the nearest one. Player 1
+    /// stands 0.5 m in front of the ball (the opponent goal's side), player
+    /// 2 0.8 m behind it, both facing it: player 1 is nearer, but must walk
+    /// round the ball first.
+    #[test]
+    fn the_player_with_the_shorter_way_to_a_kick_goes_for_the_ball() {
+        let ball = [0.0, 0.0];
+        let mut o = obs(1, robot(0.5, 0.0, std::f32::consts::PI), ball);
+        o.own[2] = robot(-0.8, 0.0, 0.0);
+        let nearest = Scripted::new(ScriptedParams::default());
+        assert_eq!(engager(&o, ball), Some(1));
+        assert_eq!(nearest.p.engage_path, 0.0);
+        let by_way = Scripted::new(ScriptedParams::parse_spec("engage_path=1").unwrap());
+        assert_eq!(by_way.engager_by_way(&o, ball), Some(2));
+        // Half the detour counted: 0.5 + (way - 0.5) / 2 is still longer.
+        let half = Scripted::new(ScriptedParams::parse_spec("engage_path=0.5").unwrap());
+        assert_eq!(half.engager_by_way(&o, ball), Some(2));
+        // Player 1 lined up behind the ball at 0.5 m: it is nearer and
+        // has no detour, so it goes.
+        o.own[1] = robot(-0.5, 0.1, 0.0);
+        assert_eq!(by_way.engager_by_way(&o, ball), Some(1));
+        // ...unless it must turn round (engage_turn, per radian).
+        o.own[1].heading = std::f32::consts::PI;
+        let turning =
+            Scripted::new(ScriptedParams::parse_spec("engage_path=1,engage_turn=0.2").unwrap());
+        assert_eq!(turning.engager_by_way(&o, ball), Some(2));
+        // The player in control keeps the ball either way.
+        o.control[1] = true;
+        assert_eq!(turning.engager_by_way(&o, ball), Some(1));
     }
 
     #[test]

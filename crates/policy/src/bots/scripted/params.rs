@@ -140,6 +140,16 @@ pub struct ScriptedParams {
     pub ball_damping: f32,
     /// See `lead` (m/s).
     pub walk_speed: f32,
+    /// Who goes for the ball: at 1, the field player with the shortest way
+    /// to a kick toward the goal, not the nearest one: a player on the
+    /// wrong side of the ball counts the walk round behind it (to `behind`
+    /// from the ball on its line to the goal, wide of the ball when the
+    /// ball is in the way), as `engage` walks it. Between 0 and 1 the two
+    /// lengths are mixed. 0: the nearest (off).
+    pub engage_path: f32,
+    /// Who goes for the ball: metres added to a player's way per radian it
+    /// must turn to face where it walks first. 0: off (m/rad).
+    pub engage_turn: f32,
 }
 
 /// The ladder of built-in teams, weakest first: level `n` is
@@ -198,6 +208,8 @@ impl Default for ScriptedParams {
             lead: 0.0,
             ball_damping: 0.8,
             walk_speed: 0.2,
+            engage_path: 0.0,
+            engage_turn: 0.0,
         }
     }
 }
@@ -352,6 +364,8 @@ impl ScriptedParams {
             ("shot_line", self.shot_line),
             ("shot_margin", self.shot_margin),
             ("lead", self.lead),
+            ("engage_path", self.engage_path),
+            ("engage_turn", self.engage_turn),
         ];
         for (k, v) in positive {
             if !(v.is_finite() && v > 0.0) {
