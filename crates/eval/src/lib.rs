@@ -6,7 +6,10 @@
 //! - [`run`]: the one runner of batches of matches: seeds, sides and
 //!   scenarios in, each match stepped to its end (threads, one forward pass
 //!   a tick for a trained team), per-match results out; one match alone,
-//!   watched tick by tick (the CLI's `match`).
+//!   watched tick by tick (the CLI's `match`). Its [`run::MatchSlot`] (a
+//!   match, its built-in robots, observations, actions and a scenario's
+//!   judge, stepped one way) is also what the learning crate's vectorised
+//!   environment and the Python package's vector env step.
 //! - [`eval`]: many matches between two teams; Table I with 95% CIs.
 //!   - `eval/seeds.rs`: evaluation and training seeds.
 //!   - `eval/stats.rs`: means with Student-t intervals, Wilson rates, a

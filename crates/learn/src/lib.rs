@@ -11,7 +11,8 @@
 //! **The environment**: what a learner sees and does.
 //! - [`mod@env`]: many matches in process, stepped together; the learning
 //!   team's robots as one batch of rows; built-in, frozen, self-play or
-//!   mixed opponents; drills.
+//!   mixed opponents; drills. Each match is a `naosoccer_eval::run::MatchSlot`,
+//!   stepped as evaluations and the CLI step theirs.
 //! - [`env::decisions`]: the decision-level MDP over the matches, and the
 //!   only place that holds actions and keeps decisions open: who decides
 //!   this tick, under which masks; each closed decision comes out as one

@@ -21,19 +21,21 @@
 //! tick (a recording, a live view, Ctrl-C), and reports its
 //! [`MatchOutcome`].
 
-use naosoccer_policy::{LearnedPolicy, Policy, PolicyError, PolicyKind};
+use naosoccer_policy::{LearnedPolicy, PolicyError, PolicyKind};
 use naosoccer_proto::{
-    Action, Event, MatchStats, Observation, PerTeam, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
+    Action, Event, MatchStats, Observation, PerTeam, Score, Team, PLAYERS_PER_TEAM, ROBOTS,
 };
-use naosoccer_referee::{Ending, Judge, Match, MatchConfig, Scenario};
+use naosoccer_referee::{Ending, Match, MatchConfig, Scenario};
 
 use crate::eval::LONG_PASS_METRES;
 
 mod one;
+mod slot;
 #[cfg(test)]
 mod tests;
 
 pub use one::{play_match, play_one, MatchOutcome};
+pub use slot::MatchSlot;
 
 /// One side of a batch of matches (of an evaluation, a drill): a built-in
 /// team or a trained one.
@@ -124,16 +126,9 @@ pub struct Ticked<'a> {
 }
 
 struct Slot {
-    m: Match,
-    judge: Option<Judge>,
+    game: MatchSlot,
     index: usize,
     swapped: bool,
-    obs: Vec<Observation>,
-    /// The built-in robots' policies (`None`: a trained side's robot).
-    policies: Vec<Option<Box<dyn Policy>>>,
-    decided: [Action; ROBOTS],
-    /// The last tick's.
-    events: Vec<Event>,
     event_count: u64,
     long_passes: PerTeam<u32>,
     ending: Option<Ending>,
@@ -150,23 +145,17 @@ impl Slot {
         }
     }
 
-    fn observe_all(&mut self) {
-        for r in RobotId::all() {
-            self.m
-                .observe_into(r.team(), r.player(), &mut self.obs[r.index()]);
-        }
-    }
-
     fn played(&self) -> Played {
+        let m = self.game.match_ref();
         Played {
             index: self.index,
-            seed: self.m.seed(),
+            seed: m.seed(),
             swapped: self.swapped,
-            ticks: self.m.tick().get(),
-            sim_seconds: self.m.sim_seconds(),
-            score: self.m.score(),
-            stats: self.m.stats(),
-            state_hash: self.m.state_hash(),
+            ticks: m.tick().get(),
+            sim_seconds: m.sim_seconds(),
+            score: m.score(),
+            stats: m.stats(),
+            state_hash: m.state_hash(),
             events: self.event_count,
             long_passes: self.long_passes,
             ending: self.ending,
@@ -192,42 +181,27 @@ impl<'s> Batch<'s> {
     ) -> Result<Batch<'s>, PolicyError> {
         let mut slots = Vec::new();
         for f in fixtures {
-            let m = match f.scenario {
-                Some((s, own)) => Match::with_scenario(cfg, f.seed, s, own)?,
-                None => Match::new(cfg, f.seed)?,
-            };
-            let seed = m.seed();
-            let policies = RobotId::all()
-                .map(|r| {
-                    let side = if (r.team() == Team::Blue) != f.swapped {
-                        &*first
-                    } else {
-                        &*second
-                    };
-                    match side {
-                        Side::Builtin(k) => Some(k.build(seed, r)),
-                        Side::Learned(_) => None,
-                    }
-                })
-                .collect();
-            let mut slot = Slot {
-                judge: f.scenario.map(|(s, own)| s.judge(cfg, own, m.tick())),
+            let mut game = MatchSlot::new(cfg, f.seed, f.scenario)?;
+            game.build_policies(|r| {
+                let side = if (r.team() == Team::Blue) != f.swapped {
+                    &*first
+                } else {
+                    &*second
+                };
+                match side {
+                    Side::Builtin(k) => Some(*k),
+                    Side::Learned(_) => None,
+                }
+            });
+            slots.push(Slot {
+                game,
                 index: f.index,
                 swapped: f.swapped,
-                obs: (0..ROBOTS)
-                    .map(|_| naosoccer_referee::blank_observation())
-                    .collect(),
-                policies,
-                decided: [Action::Stay; ROBOTS],
-                events: Vec::with_capacity(16),
                 event_count: 0,
                 long_passes: PerTeam::default(),
                 ending: None,
                 over: false,
-                m,
-            };
-            slot.observe_all();
-            slots.push(slot);
+            });
         }
         Ok(Batch {
             first,
@@ -278,9 +252,10 @@ impl<'s> Batch<'s> {
                 .iter()
                 .map(|&i| {
                     let base = slots[i].team_of(is_first).index() * PLAYERS_PER_TEAM;
+                    let g = &slots[i].game;
                     (
-                        slots[i].m.seed(),
-                        &slots[i].obs[base..base + PLAYERS_PER_TEAM],
+                        g.match_ref().seed(),
+                        &g.observations()[base..base + PLAYERS_PER_TEAM],
                     )
                 })
                 .collect();
@@ -288,8 +263,11 @@ impl<'s> Batch<'s> {
             for (j, &i) in live.iter().enumerate() {
                 let base = slots[i].team_of(is_first).index() * PLAYERS_PER_TEAM;
                 for p in 0..PLAYERS_PER_TEAM {
-                    let a = policy.action(acts[j * PLAYERS_PER_TEAM + p], &slots[i].obs[base + p]);
-                    slots[i].decided[base + p] = a;
+                    let a = policy.action(
+                        acts[j * PLAYERS_PER_TEAM + p],
+                        &slots[i].game.observations()[base + p],
+                    );
+                    slots[i].game.actions_mut()[base + p] = a;
                 }
             }
         }
@@ -310,9 +288,9 @@ impl<'s> Batch<'s> {
     pub fn ticked(&self, i: usize) -> Ticked<'_> {
         let s = &self.slots[i];
         Ticked {
-            m: &s.m,
-            actions: &s.decided,
-            events: &s.events,
+            m: s.game.match_ref(),
+            actions: s.game.actions(),
+            events: s.game.events(),
             ending: s.ending,
         }
     }
@@ -352,32 +330,19 @@ fn step_slot(slot: &mut Slot) {
     if slot.over {
         return;
     }
-    for (i, p) in slot.policies.iter_mut().enumerate() {
-        if let Some(p) = p {
-            slot.decided[i] = p.act(&slot.obs[i]);
-        }
-    }
-    // `step` lends its events out of the match; a copy into a reused
-    // buffer lets the judge and a watcher read the match and the events
-    // together.
-    slot.events.clear();
-    slot.events.extend_from_slice(slot.m.step(&slot.decided));
-    slot.event_count += slot.events.len() as u64;
-    for e in &slot.events {
+    let ending = slot.game.step();
+    slot.event_count += slot.game.events().len() as u64;
+    for e in slot.game.events() {
         if let Event::Pass { from, distance, .. } = *e {
             if distance >= LONG_PASS_METRES {
                 *slot.long_passes.get_mut(from.team()) += 1;
             }
         }
     }
-    match &slot.judge {
-        Some(judge) => {
-            slot.ending = judge.check(&slot.m, &slot.events);
-            slot.over = slot.ending.is_some();
-        }
-        None => slot.over = slot.m.is_finished(),
-    }
-    if !slot.over {
-        slot.observe_all();
+    if slot.game.is_judged() {
+        slot.ending = ending;
+        slot.over = ending.is_some();
+    } else {
+        slot.over = slot.game.match_ref().is_finished();
     }
 }

@@ -3,8 +3,9 @@
 
 use std::sync::Arc;
 
+use naosoccer_eval::run::MatchSlot;
 use naosoccer_proto::{RobotId, Team, PLAYERS_PER_TEAM};
-use naosoccer_referee::{Match, MatchConfig, Scenario};
+use naosoccer_referee::{MatchConfig, Scenario};
 
 use super::{episode_seed, EnvConfig, Slot, VecEnv};
 use crate::LearnError;
@@ -196,19 +197,16 @@ impl Slot {
         env: &EnvConfig,
     ) -> Result<(), LearnError> {
         let seed = episode_seed(env.seed, self.index, self.episode);
-        self.judge = None;
         match self.scenarios.clone() {
             Some(list) => {
                 use rand::Rng;
                 let k = self
                     .episode_rng(env, 0x5CE7_A410_D111)
                     .random_range(0..list.len());
-                let s = &list[k];
-                self.m = Match::with_scenario(cfg, seed, s, self.team)?;
-                self.judge = Some(s.judge(cfg, self.team, self.m.tick()));
+                self.game = MatchSlot::new(cfg, seed, Some((&list[k], self.team)))?;
             }
             None => {
-                self.m = Match::new(cfg, seed)?;
+                self.game = MatchSlot::new(cfg, seed, None)?;
                 self.place_drill(env);
             }
         }
@@ -226,7 +224,7 @@ impl Slot {
         let (sign, turn) = self.to_world();
         let bx = rng.random_range(d.ball_x.0..=d.ball_x.1);
         let by = rng.random_range(-d.ball_y..=d.ball_y);
-        let sim = self.m.sim_mut();
+        let sim = self.game.match_mut().sim_mut();
         sim.place_ball(sign * bx, sign * by);
         let own = self.team.index() * PLAYERS_PER_TEAM;
         let mut aside = 0;
@@ -251,6 +249,6 @@ impl Slot {
         }
         // A staged ball, not a kick-off: nobody is held back from it, and
         // the kick-off rule does not disallow the drill's goal.
-        self.m.clear_set_play();
+        self.game.match_mut().clear_set_play();
     }
 }

@@ -8,14 +8,18 @@
 //!
 //! Matches are independent, so stepping them on several threads gives the
 //! same results as on one: each match's seed depends only on the base seed,
-//! its index and its episode number.
+//! its index and its episode number. Each is a
+//! [`naosoccer_eval::run::MatchSlot`], built and stepped as evaluations and
+//! the CLI build and step theirs; this module adds the learners' rows,
+//! rewards, the opponents' mix and the episodes' restarts.
 //!
 //! Over it, [`decisions`] is the decision-level MDP the team presets learn
 //! on: holds, masks and open decisions, each closed decision one transition.
 
-use naosoccer_policy::{Policy, PolicyKind};
-use naosoccer_proto::{Action, Event, Observation, RobotId, Team, PLAYERS_PER_TEAM, ROBOTS};
-use naosoccer_referee::{Judge, Match, MatchConfig, Scenario};
+use naosoccer_eval::run::MatchSlot;
+use naosoccer_policy::PolicyKind;
+use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM};
+use naosoccer_referee::{MatchConfig, Scenario};
 
 use crate::obs::{ObsScale, OBS_DIM};
 use crate::LearnError;
@@ -58,27 +62,23 @@ pub struct EnvConfig {
 
 struct Slot {
     index: usize,
-    m: Match,
+    /// The match, its built-in robots (none where a network decides) and
+    /// the observations of all eight robots.
+    game: MatchSlot,
     team: Team,
     episode: u64,
-    /// Observations of all eight robots, by robot index.
-    obs: Vec<Observation>,
-    /// Built-in policies by robot index (none where a network decides).
-    policies: Vec<Option<Box<dyn Policy>>>,
     returns: Vec<f32>,
     finished: Option<Episode>,
     /// Index of this episode's opponent.
     opp: usize,
     drill: Option<Drill>,
     /// This match plays episodes of these scenarios ([`ScenarioDrills`]),
-    /// judged by `judge`, and cuts them every `window_len` ticks.
+    /// judged by their end conditions, and cuts them every `window_len`
+    /// ticks.
     scenarios: Option<std::sync::Arc<Vec<Scenario>>>,
-    judge: Option<Judge>,
     /// Ticks since the matches last started together, and a match's length.
     window: u64,
     window_len: u64,
-    /// The last tick's events (read by the judge).
-    events: Vec<Event>,
 }
 
 /// The vectorised environment.
@@ -130,29 +130,22 @@ impl VecEnv {
             } else {
                 Team::Red
             };
-            let m = Match::new(cfg, episode_seed(env.seed, index, 0))?;
-            let window_len = m.total_ticks();
+            let game = MatchSlot::new(cfg, episode_seed(env.seed, index, 0), None)?;
+            let window_len = game.match_ref().total_ticks();
             let mut slot = Slot {
                 index,
-                obs: (0..ROBOTS)
-                    .map(|_| naosoccer_referee::blank_observation())
-                    .collect(),
-                policies: Vec::new(),
                 returns: vec![0.0; l],
-                m,
+                game,
                 team,
                 episode: 0,
                 finished: None,
                 opp: 0,
                 drill: None,
                 scenarios: None,
-                judge: None,
                 window: 0,
                 window_len,
-                events: Vec::new(),
             };
             slot.build_policies(&env, &mix);
-            slot.observe_all();
             slots.push(slot);
         }
         let scale = ObsScale::from_config(cfg);
@@ -244,7 +237,7 @@ impl VecEnv {
     pub fn learner_observation(&self, row: usize) -> &Observation {
         let l = self.env.learners.len();
         let slot = &self.slots[row / l];
-        &slot.obs[slot.team.index() * PLAYERS_PER_TEAM + self.env.learners[row % l]]
+        &slot.game.observations()[slot.team.index() * PLAYERS_PER_TEAM + self.env.learners[row % l]]
     }
 
     /// Whether row `row`'s robot is in play (not absent from the scenario
@@ -254,7 +247,7 @@ impl VecEnv {
         let slot = &self.slots[row / l];
         let robot = RobotId::new(slot.team, self.env.learners[row % l])
             .expect("learners are players of a team");
-        !slot.m.is_out_of_play(robot)
+        !slot.game.match_ref().is_out_of_play(robot)
     }
 
     /// Replaces the opponent (self-play: a newer snapshot).
@@ -297,7 +290,7 @@ impl VecEnv {
             slot.returns = vec![0.0; l];
             slot.finished = None;
             slot.build_policies(&self.env, &self.mix);
-            slot.observe_all();
+            slot.game.observe_all();
         }
         for (slot, f) in self.slots.iter().zip(self.feats.chunks_mut(l * OBS_DIM)) {
             slot.encode_learners(&self.env.learners, &self.scale, f);
@@ -330,7 +323,11 @@ impl VecEnv {
             at.clear();
             for (j, slot) in self.slots.iter().enumerate().filter(|(_, s)| s.opp == k) {
                 let base = slot.team.other().index() * PLAYERS_PER_TEAM;
-                teams.push((slot.m.seed(), &slot.obs[base..base + PLAYERS_PER_TEAM]));
+                let g = &slot.game;
+                teams.push((
+                    g.match_ref().seed(),
+                    &g.observations()[base..base + PLAYERS_PER_TEAM],
+                ));
                 at.push(j);
             }
             if teams.is_empty() {
@@ -445,7 +442,7 @@ fn step_chunk(
             &mut rewards[j * l..(j + 1) * l],
         );
         dones[j * l..(j + 1) * l].fill(done);
-        let cut = done && !slot.m.is_finished();
+        let cut = done && !slot.game.match_ref().is_finished();
         truncated[j * l..(j + 1) * l].fill(cut);
         if cut {
             slot.encode_learners(
@@ -472,32 +469,21 @@ impl Slot {
     fn build_policies(&mut self, env: &EnvConfig, mix: &Mix) {
         self.opp = mix.pick(env.seed, self.index, self.episode);
         let opp_kind = mix.kinds[self.opp];
-        let seed = self.m.seed();
-        self.policies = RobotId::all()
-            .map(|r| {
-                if r.team() == self.team {
-                    (!env.learners.contains(&r.player())).then(|| env.teammates.build(seed, r))
-                } else {
-                    opp_kind.map(|k| k.build(seed, r))
-                }
-            })
-            .collect();
-    }
-
-    fn observe_all(&mut self) {
-        for r in RobotId::all() {
-            self.m
-                .observe_into(r.team(), r.player(), &mut self.obs[r.index()]);
-        }
+        let team = self.team;
+        self.game.build_policies(|r| {
+            if r.team() == team {
+                (!env.learners.contains(&r.player())).then_some(env.teammates)
+            } else {
+                opp_kind
+            }
+        });
     }
 
     fn encode_learners(&self, learners: &[usize], scale: &ObsScale, out: &mut [f32]) {
         let base = self.team.index() * PLAYERS_PER_TEAM;
+        let obs = self.game.observations();
         for (k, &p) in learners.iter().enumerate() {
-            scale.encode(
-                &self.obs[base + p],
-                &mut out[k * OBS_DIM..(k + 1) * OBS_DIM],
-            );
+            scale.encode(&obs[base + p], &mut out[k * OBS_DIM..(k + 1) * OBS_DIM]);
         }
     }
 
@@ -509,43 +495,34 @@ impl Slot {
         opp: Option<&[Action]>,
         rewards: &mut [f32],
     ) -> bool {
-        let mut joint = [Action::Stay; ROBOTS];
         let own = self.team.index() * PLAYERS_PER_TEAM;
         let other = self.team.other().index() * PLAYERS_PER_TEAM;
         // A network's `support` becomes the step toward the robot's support
         // spot, as in play (`LearnedPolicy::action`).
-        let field = self.m.field();
+        let field = self.game.match_ref().field();
         let half = [field.half_length, field.half_width];
         let spot = env.support_spot;
         let net = |i: usize| NetAction::from_index(i).expect("a network output is an action");
         for (k, &p) in env.learners.iter().enumerate() {
-            joint[own + p] = to_action(net(actions[k]), &self.obs[own + p], half, spot);
+            let a = to_action(
+                net(actions[k]),
+                &self.game.observations()[own + p],
+                half,
+                spot,
+            );
+            self.game.actions_mut()[own + p] = a;
         }
         if let Some(opp) = opp {
-            joint[other..other + PLAYERS_PER_TEAM].copy_from_slice(opp);
+            self.game.actions_mut()[other..other + PLAYERS_PER_TEAM].copy_from_slice(opp);
         }
-        for (i, policy) in self.policies.iter_mut().enumerate() {
-            if let Some(policy) = policy {
-                joint[i] = policy.act(&self.obs[i]);
-            }
-        }
-        let score = self.m.score();
-        let ended = match &self.judge {
-            Some(judge) => {
-                self.events.clear();
-                self.events.extend_from_slice(self.m.step(&joint));
-                judge.check(&self.m, &self.events).is_some()
-            }
-            None => {
-                self.m.step(&joint);
-                false
-            }
-        };
-        self.observe_all();
+        let score = self.game.match_ref().score();
+        // The built-in robots decide, the match steps, a scenario's judge
+        // reads the tick and every robot observes.
+        let ended = self.game.step().is_some();
         // Each observation carries its robot's reward for the tick
         // (`Match::reward`, what the server sends too).
         for (k, &p) in env.learners.iter().enumerate() {
-            let r = self.obs[own + p].reward;
+            let r = self.game.observations()[own + p].reward;
             rewards[k] = r;
             self.returns[k] += r;
         }
@@ -556,14 +533,13 @@ impl Slot {
         if window_end {
             self.window = 0;
         }
-        self.m.is_finished()
-            || (self.drill.is_some() && self.m.score() != score)
-            || ended
-            || window_end
+        let m = self.game.match_ref();
+        m.is_finished() || (self.drill.is_some() && m.score() != score) || ended || window_end
     }
 
     fn restart(&mut self, cfg: &MatchConfig, env: &EnvConfig, mix: &Mix) -> Result<(), LearnError> {
-        let naosoccer_proto::PerTeam { blue, red } = self.m.score();
+        let m = self.game.match_ref();
+        let naosoccer_proto::PerTeam { blue, red } = m.score();
         let (gf, ga) = if self.team == Team::Blue {
             (blue, red)
         } else {
@@ -576,13 +552,13 @@ impl Slot {
             goals_for: gf,
             goals_against: ga,
             returns,
-            stats: self.m.stats(),
-            ticks: self.m.tick().get(),
+            stats: m.stats(),
+            ticks: m.tick().get(),
         });
         self.episode += 1;
         self.start_episode(cfg, env)?;
         self.build_policies(env, mix);
-        self.observe_all();
+        self.game.observe_all();
         Ok(())
     }
 }

@@ -330,7 +330,7 @@ impl VecMatches {
             .map(|i| {
                 let mut slot = new_slot(setup, i, seed, 0)?;
                 slot.out = SlotOut::new(setup);
-                write_rows(setup, &slot.obs, &mut slot.out);
+                write_rows(setup, slot.game.observations(), &mut slot.out);
                 Ok(slot)
             })
             .collect::<Result<Vec<_>, VecEnvError>>()?;
@@ -400,7 +400,8 @@ impl VecMatches {
             let slot = &mut *slot;
             for (r, &a) in setup.robots.iter().zip(acts) {
                 let a = NetAction::from_index(a as usize).expect("actions are checked above");
-                slot.actions[r.index()] = to_action(a, &slot.obs[r.index()], half, spot);
+                let a = to_action(a, &slot.game.observations()[r.index()], half, spot);
+                slot.game.actions_mut()[r.index()] = a;
             }
         }
         // A trained opponent decides for all matches in one forward pass.
@@ -412,7 +413,13 @@ impl VecMatches {
             let mut slots: Vec<MutexGuard<Slot>> = (0..pool.len()).map(|i| pool.lock(i)).collect();
             let teams: Vec<(u64, &[Observation])> = slots
                 .iter()
-                .map(|s| (s.m.seed(), &s.obs[base..base + PLAYERS_PER_TEAM]))
+                .map(|s| {
+                    let g = &s.game;
+                    (
+                        g.match_ref().seed(),
+                        &g.observations()[base..base + PLAYERS_PER_TEAM],
+                    )
+                })
                 .collect();
             self.opp_actions.resize(teams.len() * PLAYERS_PER_TEAM, 0);
             policy.act_matches(&teams, &mut self.opp_actions);
@@ -421,9 +428,9 @@ impl VecMatches {
                 for p in 0..PLAYERS_PER_TEAM {
                     let a = policy.action(
                         self.opp_actions[i * PLAYERS_PER_TEAM + p],
-                        &slot.obs[base + p],
+                        &slot.game.observations()[base + p],
                     );
-                    slot.actions[base + p] = a;
+                    slot.game.actions_mut()[base + p] = a;
                 }
             }
         }
@@ -457,12 +464,14 @@ impl VecMatches {
 
     /// The state hash of each slot's current match.
     pub fn state_hashes(&self) -> Vec<u64> {
-        self.slots().map(|s| s.m.state_hash()).collect()
+        self.slots()
+            .map(|s| s.game.match_ref().state_hash())
+            .collect()
     }
 
     /// Each slot's current match seed.
     pub fn seeds(&self) -> Vec<u64> {
-        self.slots().map(|s| s.m.seed()).collect()
+        self.slots().map(|s| s.game.match_ref().seed()).collect()
     }
 
     /// The scenario each slot's current match started from, as its index
@@ -473,19 +482,21 @@ impl VecMatches {
 
     /// Each slot's current tick.
     pub fn ticks(&self) -> Vec<u64> {
-        self.slots().map(|s| s.m.tick().get()).collect()
+        self.slots()
+            .map(|s| s.game.match_ref().tick().get())
+            .collect()
     }
 
     /// Each slot's current score, as (blue, red).
     pub fn scores(&self) -> Vec<Score> {
-        self.slots().map(|s| s.m.score()).collect()
+        self.slots().map(|s| s.game.match_ref().score()).collect()
     }
 
     /// `f` of slot `slot`'s current match (as it ended, without restarts),
     /// `None` before the first reset or for a slot out of range.
     pub fn with_match<R>(&self, slot: usize, f: impl FnOnce(&Match) -> R) -> Option<R> {
         let pool = self.pool.as_ref()?;
-        (slot < pool.len()).then(|| f(&pool.lock(slot).m))
+        (slot < pool.len()).then(|| f(pool.lock(slot).game.match_ref()))
     }
 
     /// Appends each slot's global state ([`crate::state`], `STATE_DIM`
@@ -497,7 +508,8 @@ impl VecMatches {
             let at = out.len();
             out.resize(at + crate::state::STATE_DIM, 0.0);
             let scale = &self.setup.scale;
-            crate::state::write_state(scale, &slot.obs[b], &slot.obs[r], &mut out[at..]);
+            let obs = slot.game.observations();
+            crate::state::write_state(scale, &obs[b], &obs[r], &mut out[at..]);
         }
     }
 }

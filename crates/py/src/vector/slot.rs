@@ -2,10 +2,10 @@
 //! last reset or step wrote; starting a slot's next match and stepping it
 //! one control tick, on whichever thread takes it.
 
+use naosoccer_eval::run::MatchSlot;
 use naosoccer_policy::actions::banned_actions;
-use naosoccer_policy::{NetAction, Policy, OBS_DIM};
-use naosoccer_proto::{Action, Event, Observation, RobotId, ROBOTS};
-use naosoccer_referee::{blank_observation, Judge, Match};
+use naosoccer_policy::{NetAction, OBS_DIM};
+use naosoccer_proto::Observation;
 
 use super::setup::{match_seed, pick, Setup};
 use super::{Finished, ScenarioEnding, VecEnvError};
@@ -15,20 +15,14 @@ pub(super) struct Slot {
     /// the current match's seed.
     pub(super) index: usize,
     pub(super) reset_seed: u64,
-    pub(super) m: Match,
-    pub(super) obs: Vec<Observation>,
-    /// Built-in opponents, one per robot (`None`: driven by the caller or
-    /// by a trained opponent).
-    pub(super) policies: Vec<Option<Box<dyn Policy>>>,
-    pub(super) actions: [Action; ROBOTS],
+    /// The match, its built-in opponents (none for the robots driven by
+    /// the caller or by a trained opponent), its robots' observations and
+    /// actions, and a scenario's judge.
+    pub(super) game: MatchSlot,
     /// Matches this slot finished since the last reset.
     pub(super) episode: u64,
     /// The scenario the match started from (its index in the list).
     pub(super) drill: Option<usize>,
-    /// With a scenario: the judge of this match's play, and the last
-    /// tick's events it reads.
-    pub(super) judge: Option<Judge>,
-    pub(super) events: Vec<Event>,
     /// Finished and, without restarts, kept until the next reset.
     pub(super) ended: bool,
     /// What the last reset or step wrote for this slot, kept from match to
@@ -71,47 +65,21 @@ pub(super) fn new_slot(
 ) -> Result<Slot, VecEnvError> {
     let seed = match_seed(setup, index, reset_seed, episode);
     let drill = pick(setup, seed);
-    let (m, judge) = match drill {
-        Some(d) => {
-            let (s, own) = (&setup.drills[d].scenario, setup.own);
-            let m = Match::with_scenario(&setup.cfg, seed, s, own)?;
-            let judge = s.judge(&setup.cfg, own, m.tick());
-            (m, Some(judge))
-        }
-        None => (Match::new(&setup.cfg, seed)?, None),
-    };
+    let scenario = drill.map(|d| (&setup.drills[d].scenario, setup.own));
+    let mut game = MatchSlot::new(&setup.cfg, seed, scenario)?;
     let builtin = drill
         .and_then(|d| setup.drills[d].opponent)
         .or(setup.builtin);
-    let policies = RobotId::all()
-        .map(|r| match builtin {
-            Some(k) if !setup.robots.contains(&r) => Some(k.build(seed, r)),
-            _ => None,
-        })
-        .collect();
-    let mut slot = Slot {
+    game.build_policies(|r| builtin.filter(|_| !setup.robots.contains(&r)));
+    Ok(Slot {
         index,
         reset_seed,
-        m,
-        obs: (0..ROBOTS).map(|_| blank_observation()).collect(),
-        policies,
-        actions: [Action::Stay; ROBOTS],
+        game,
         episode,
         drill,
-        judge,
-        events: Vec::new(),
         ended: false,
         out: SlotOut::default(),
-    };
-    observe_all(&mut slot);
-    Ok(slot)
-}
-
-pub(super) fn observe_all(slot: &mut Slot) {
-    for r in RobotId::all() {
-        slot.m
-            .observe_into(r.team(), r.player(), &mut slot.obs[r.index()]);
-    }
+    })
 }
 
 /// Writes a slot's rows of observations and masks from its robots'
@@ -145,36 +113,23 @@ pub(super) fn write_rows(setup: &Setup, obs: &[Observation], out: &mut SlotOut) 
 pub(super) fn step_slot(setup: &Setup, slot: &mut Slot) -> Result<(), VecEnvError> {
     slot.out.terminated = false;
     slot.out.finished = None;
-    for (k, p) in slot.policies.iter_mut().enumerate() {
-        if let Some(p) = p {
-            slot.actions[k] = p.act(&slot.obs[k]);
-        }
-    }
-    let ending = match &slot.judge {
-        Some(judge) => {
-            slot.events.clear();
-            slot.events.extend_from_slice(slot.m.step(&slot.actions));
-            judge.check(&slot.m, &slot.events)
-        }
-        None => {
-            slot.m.step(&slot.actions);
-            None
-        }
-    };
+    // The built-in robots decide, the match steps, a scenario's judge reads
+    // the tick and every robot observes.
+    let ending = slot.game.step();
+    let m = slot.game.match_ref();
     for (k, r) in setup.robots.iter().enumerate() {
-        slot.out.rewards[k] = slot.m.reward(r.team(), r.player());
+        slot.out.rewards[k] = m.reward(r.team(), r.player());
     }
-    observe_all(slot);
-    write_rows(setup, &slot.obs, &mut slot.out);
-    if slot.m.is_finished() || ending.is_some() {
+    write_rows(setup, slot.game.observations(), &mut slot.out);
+    if m.is_finished() || ending.is_some() {
         slot.out.terminated = true;
         slot.out.finished = Some(Finished {
             slot: slot.index,
-            seed: slot.m.seed(),
-            ticks: slot.m.tick().get(),
-            score: slot.m.score(),
-            stats: slot.m.stats(),
-            state_hash: slot.m.state_hash(),
+            seed: m.seed(),
+            ticks: m.tick().get(),
+            score: m.score(),
+            stats: m.stats(),
+            state_hash: m.state_hash(),
             obs: slot.out.obs.clone(),
             scenario: ending.zip(slot.drill).map(|(e, d)| ScenarioEnding {
                 name: setup.drills[d].scenario.name.clone(),
@@ -190,7 +145,7 @@ pub(super) fn step_slot(setup: &Setup, slot: &mut Slot) -> Result<(), VecEnvErro
         let mut next = new_slot(setup, slot.index, slot.reset_seed, slot.episode + 1)?;
         std::mem::swap(&mut next.out, &mut slot.out);
         *slot = next;
-        write_rows(setup, &slot.obs, &mut slot.out);
+        write_rows(setup, slot.game.observations(), &mut slot.out);
     }
     Ok(())
 }

@@ -520,14 +520,21 @@ fn a_panic_on_a_worker_is_an_error() {
         assert_eq!(pool.workers(), 1);
         // The caller takes slot 0 first and waits at the barrier for
         // slot 1, which only the worker can then be stepping.
-        pool.lock(0).policies[4] = Some(Box::new(Twin {
-            barrier: Arc::clone(&barrier),
-            panics: None,
-        }));
-        pool.lock(1).policies[4] = Some(Box::new(Twin {
-            barrier,
-            panics: Some(Arc::clone(&thread)),
-        }));
+        let red0 = RobotId::new(Team::Red, 0).unwrap();
+        pool.lock(0).game.set_policy(
+            red0,
+            Some(Box::new(Twin {
+                barrier: Arc::clone(&barrier),
+                panics: None,
+            })),
+        );
+        pool.lock(1).game.set_policy(
+            red0,
+            Some(Box::new(Twin {
+                barrier,
+                panics: Some(Arc::clone(&thread)),
+            })),
+        );
     }
     let stay = [4i64; 8];
     let e = env.step(&stay).err().unwrap();
