@@ -372,8 +372,14 @@ pub fn run(dir: &Path) -> anyhow::Result<()> {
         std::fs::copy(last.join(f), dir.join(f))
             .with_context(|| format!("copying {} into {}", f, dir.display()))?;
     }
+    // The team's spec names its algorithm (the last stage's config.json).
+    let algo = std::fs::read_to_string(dir.join("config.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|c| c["algo"].as_str().map(str::to_string))
+        .unwrap_or_else(|| "ppo".into());
     eprintln!(
-        "recipe done in {:.1} min of wall clock over {} sitting(s) (time.json); the team: ppo:{}",
+        "recipe done in {:.1} min of wall clock over {} sitting(s) (time.json); the team: {algo}:{}",
         times.total_seconds / 60.0,
         times.sittings,
         dir.display()

@@ -357,6 +357,36 @@ fn dqn_team_preset_trains_repeatably_and_plays_its_decision_mdp() {
     assert!(p.decision().is_some_and(|d| d.mask_shoot));
 }
 
+/// Issue 40: a DQN run plays an opponent schedule as a PPO run does (the
+/// shipped DQN recipe learns against `random`, then `random` and
+/// `scripted:1`): a stage with the learner's snapshots (`pool`) plays
+/// them, the snapshots are taken into `pool/`, and the run repeats
+/// exactly; a stage change alters what it learns from.
+#[test]
+fn dqn_trains_against_an_opponent_schedule() {
+    use naosoccer_learn::schedule::Schedule;
+
+    let _torch = torch_lock();
+    tch::set_num_threads(1);
+    let run = |spec: &str, name: &str| {
+        let mut cfg = tiny_config(Algo::Dqn, 9);
+        cfg.learners = vec![0, 1, 2, 3];
+        cfg.dqn = naosoccer_learn::config::DqnConfig::team();
+        let mut sched = Schedule::parse(spec).unwrap();
+        sched.pool_every = 400;
+        cfg.opponent = OpponentSpec::Schedule(sched);
+        short_run(cfg, name)
+    };
+    let (dir, a) = run("idle@400,random+pool", "dqn_sched_a");
+    let (_, b) = run("idle@400,random+pool", "dqn_sched_b");
+    assert_eq!(a, b, "same seed and schedule, same metrics");
+    assert!(a.lines().count() > 2, "{a}");
+    let snapshots = std::fs::read_dir(dir.join("pool")).unwrap().count();
+    assert!(snapshots >= 2, "{snapshots} pool snapshots");
+    let (_, c) = run("idle", "dqn_sched_c");
+    assert_ne!(a, c, "another schedule, other metrics");
+}
+
 /// Issue 40: DQN's team preset with the whole action set (`pass`, a held
 /// `support` to the `facing` spot with roles, `defend`, so `approach`'s
 /// output is there and always masked) trains end to end, its network

@@ -24,13 +24,9 @@ fn opponent_for(cfg: &TrainConfig) -> Result<Opponent, LearnError> {
         // The first snapshot is the untrained network, as in self-play from
         // scratch.
         OpponentSpec::SelfPlay { .. } => Opponent::Net(Box::new(self_play_snapshot(cfg, None)?)),
-        // The schedule's runner sets the opponents once the learner exists.
-        OpponentSpec::Schedule(_) if cfg.algo == Algo::Ppo => Opponent::Builtin(PolicyKind::Idle),
-        OpponentSpec::Schedule(_) => {
-            return Err(LearnError::Config(
-                "opponent schedules are for PPO runs".into(),
-            ))
-        }
+        // The schedule's runner sets the opponents once the learner exists
+        // (a DQN learner's snapshots play greedily, as in self-play).
+        OpponentSpec::Schedule(_) => Opponent::Builtin(PolicyKind::Idle),
     })
 }
 
