@@ -1883,3 +1883,63 @@ fn without_decision_settings_every_robot_decides_every_tick() {
     }
     assert_eq!((ended, ticks), (rows, 30));
 }
+
+/// The vectorised environment steps the same matches, bit for bit, on one
+/// thread or on several (the shared stepper of every batch of matches):
+/// observations, rewards, ends and finished episodes, over restarts.
+#[test]
+fn the_environment_is_the_same_on_any_number_of_threads() {
+    let cfg = MatchConfig {
+        minutes: 0.5,
+        ..MatchConfig::default()
+    };
+    let trace = |threads: usize| {
+        let mut env = VecEnv::new(
+            &cfg,
+            EnvConfig {
+                matches: 5,
+                learners: vec![0, 2, 3],
+                teammates: PolicyKind::Scripted,
+                threads,
+                seed: 9,
+                support_spot: Default::default(),
+            },
+            Opponent::Builtin(PolicyKind::Random),
+        )
+        .unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut actions = vec![0usize; env.rows()];
+        let mut trace = Vec::new();
+        for _ in 0..700 {
+            actions.iter_mut().for_each(|a| *a = rng.random_range(0..5));
+            let finished = env.step(&actions).unwrap();
+            trace.push(format!(
+                "{:?} {:?} {:?} {:?}",
+                env.observations()
+                    .iter()
+                    .map(|x| x.to_bits())
+                    .collect::<Vec<_>>(),
+                env.rewards()
+                    .iter()
+                    .map(|x| x.to_bits())
+                    .collect::<Vec<_>>(),
+                env.dones(),
+                finished
+            ));
+        }
+        assert!(
+            env.episodes().iter().all(|&e| e >= 2),
+            "every match restarted"
+        );
+        trace
+    };
+    let one = trace(1);
+    for threads in [2, 3, 8] {
+        let other = trace(threads);
+        let first = one.iter().zip(&other).position(|(a, b)| a != b);
+        assert_eq!(
+            first, None,
+            "threads {threads}: the first tick that differs"
+        );
+    }
+}

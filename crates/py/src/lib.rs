@@ -6,7 +6,6 @@
 //! Frames for `render()` are drawn by `naosoccer render`'s own code
 //! (crates/render).
 
-pub mod pool;
 pub mod state;
 pub mod vector;
 

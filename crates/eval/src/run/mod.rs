@@ -14,8 +14,8 @@
 //! A match starts from the kick-off, or from a scenario with its own team
 //! playing a given colour; it ends with the match clock, or at the
 //! scenario's first end condition that holds (its [`Judge`]). The matches
-//! are stepped side by side, split among threads; each holds its own match,
-//! so the thread count changes no result.
+//! are stepped side by side by a [`Stepper`]'s threads; each holds its own
+//! match, so the thread count changes no result.
 //!
 //! [`Batch`] steps many matches; [`play_one`] plays one, watched tick by
 //! tick (a recording, a live view, Ctrl-C), and reports its
@@ -33,9 +33,11 @@ mod one;
 mod slot;
 #[cfg(test)]
 mod tests;
+mod threads;
 
 pub use one::{play_match, play_one, MatchOutcome};
 pub use slot::MatchSlot;
+pub use threads::Stepper;
 
 /// One side of a batch of matches (of an evaluation, a drill): a built-in
 /// team or a trained one.
@@ -169,6 +171,9 @@ pub struct Batch<'s> {
     second: &'s mut Side,
     slots: Vec<Slot>,
     acts: Vec<usize>,
+    /// The threads stepping the matches, from the first tick on (again
+    /// when the count asked for changes).
+    stepper: Option<Stepper>,
 }
 
 impl<'s> Batch<'s> {
@@ -208,6 +213,7 @@ impl<'s> Batch<'s> {
             second,
             slots,
             acts: Vec::new(),
+            stepper: None,
         })
     }
 
@@ -238,6 +244,7 @@ impl<'s> Batch<'s> {
             second,
             slots,
             acts,
+            stepper,
         } = self;
         for (is_first, side) in [(true, &mut **first), (false, &mut **second)] {
             let Side::Learned(policy) = side else {
@@ -271,7 +278,13 @@ impl<'s> Batch<'s> {
                 }
             }
         }
-        for_each_slot(slots, threads, step_slot);
+        let threads = threads.clamp(1, slots.len().max(1));
+        if stepper.as_ref().is_none_or(|s| s.threads() != threads) {
+            *stepper = Some(Stepper::new(threads).expect("cannot start the stepping threads"));
+        }
+        if let Some(stepper) = stepper {
+            stepper.for_each(slots, step_slot);
+        }
     }
 
     /// The number of matches.
@@ -303,23 +316,6 @@ impl<'s> Batch<'s> {
     /// Every match as far as it went, in fixture order.
     pub fn results(&self) -> Vec<Played> {
         self.slots.iter().map(Slot::played).collect()
-    }
-}
-
-/// Runs `step` on every slot, the slots split into up to `threads` runs
-/// of neighbours on scoped threads. Each slot holds its own match, so the
-/// thread count changes no result.
-fn for_each_slot<S: Send>(slots: &mut [S], threads: usize, step: fn(&mut S)) {
-    let threads = threads.clamp(1, slots.len().max(1));
-    let per = slots.len().div_ceil(threads).max(1);
-    if threads == 1 {
-        slots.iter_mut().for_each(step);
-    } else {
-        std::thread::scope(|s| {
-            for chunk in slots.chunks_mut(per) {
-                s.spawn(move || chunk.iter_mut().for_each(step));
-            }
-        });
     }
 }
 

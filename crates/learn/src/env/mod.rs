@@ -10,13 +10,14 @@
 //! same results as on one: each match's seed depends only on the base seed,
 //! its index and its episode number. Each is a
 //! [`naosoccer_eval::run::MatchSlot`], built and stepped as evaluations and
-//! the CLI build and step theirs; this module adds the learners' rows,
+//! the CLI build and step theirs, by the same threads (a
+//! [`naosoccer_eval::run::Stepper`]); this module adds the learners' rows,
 //! rewards, the opponents' mix and the episodes' restarts.
 //!
 //! Over it, [`decisions`] is the decision-level MDP the team presets learn
 //! on: holds, masks and open decisions, each closed decision one transition.
 
-use naosoccer_eval::run::MatchSlot;
+use naosoccer_eval::run::{MatchSlot, Stepper};
 use naosoccer_policy::PolicyKind;
 use naosoccer_proto::{Action, Observation, RobotId, Team, PLAYERS_PER_TEAM};
 use naosoccer_referee::{MatchConfig, Scenario};
@@ -101,6 +102,8 @@ pub struct VecEnv {
     /// Network opponents' actions, as their teams play them.
     opp_actions: Vec<Action>,
     ticks: u64,
+    /// The threads stepping the matches.
+    stepper: Stepper,
 }
 
 pub use naosoccer_eval::eval::{episode_seed, legacy_episode_seed};
@@ -149,6 +152,9 @@ impl VecEnv {
             slots.push(slot);
         }
         let scale = ObsScale::from_config(cfg);
+        let stepper = Stepper::new(env.threads.clamp(1, env.matches)).map_err(|e| {
+            LearnError::Config(format!("cannot start the threads stepping matches: {e}"))
+        })?;
         let mut venv = VecEnv {
             cfg: cfg.clone(),
             feats: vec![0.0; env.matches * l * OBS_DIM],
@@ -156,7 +162,8 @@ impl VecEnv {
             dones: vec![false; env.matches * l],
             truncated: vec![false; env.matches * l],
             final_feats: vec![0.0; env.matches * l * OBS_DIM],
-            opp_actions: Vec::new(),
+            opp_actions: vec![Action::Stay; env.matches * PLAYERS_PER_TEAM],
+            stepper,
             env,
             scale,
             slots,
@@ -310,8 +317,6 @@ impl VecEnv {
     pub fn step(&mut self, actions: &[usize]) -> Result<Vec<Episode>, LearnError> {
         let l = self.env.learners.len();
         assert_eq!(actions.len(), self.rows(), "one action per learning robot");
-        self.opp_actions
-            .resize(self.env.matches * PLAYERS_PER_TEAM, Action::Stay);
         let mut teams: Vec<(u64, &[Observation])> = Vec::new();
         let mut at: Vec<usize> = Vec::new();
         let mut acts: Vec<usize> = Vec::new();
@@ -344,59 +349,30 @@ impl VecEnv {
                 }
             }
         }
-        let threads = self.env.threads.clamp(1, self.env.matches);
-        let per = self.env.matches.div_ceil(threads);
         let cfg = &self.cfg;
         let env = &self.env;
         let scale = &self.scale;
         let mix = &self.mix;
-        let opp_actions: &[Action] = &self.opp_actions;
-        let work = self
+        // One work item a match: the match and its rows of every buffer.
+        let work: Vec<_> = self
             .slots
-            .chunks_mut(per)
-            .zip(actions.chunks(per * l))
-            .zip(self.feats.chunks_mut(per * l * OBS_DIM))
-            .zip(self.rewards.chunks_mut(per * l))
-            .zip(self.dones.chunks_mut(per * l))
+            .iter_mut()
+            .zip(actions.chunks(l))
+            .zip(self.opp_actions.chunks(PLAYERS_PER_TEAM))
+            .zip(self.feats.chunks_mut(l * OBS_DIM))
+            .zip(self.rewards.chunks_mut(l))
+            .zip(self.dones.chunks_mut(l))
             .zip(
                 self.truncated
-                    .chunks_mut(per * l)
-                    .zip(self.final_feats.chunks_mut(per * l * OBS_DIM)),
+                    .chunks_mut(l)
+                    .zip(self.final_feats.chunks_mut(l * OBS_DIM)),
             )
-            .enumerate();
-        let results: Vec<Result<(), LearnError>> = if threads == 1 {
-            work.map(|(c, (((((slots, a), f), r), d), cut))| {
-                step_chunk(
-                    cfg,
-                    env,
-                    scale,
-                    mix,
-                    slots,
-                    a,
-                    opp_chunk(opp_actions, c, per),
-                    f,
-                    r,
-                    d,
-                    cut,
-                )
-            })
-            .collect()
-        } else {
-            std::thread::scope(|s| {
-                let handles: Vec<_> = work
-                    .map(|(c, (((((slots, a), f), r), d), cut))| {
-                        let opp = opp_chunk(opp_actions, c, per);
-                        s.spawn(move || {
-                            step_chunk(cfg, env, scale, mix, slots, a, opp, f, r, d, cut)
-                        })
-                    })
-                    .collect();
-                handles
-                    .into_iter()
-                    .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                    .collect()
-            })
-        };
+            .collect();
+        let results = self
+            .stepper
+            .map(work, |((((((slot, a), opp), f), r), d), cut)| {
+                step_match(cfg, env, scale, mix, slot, a, opp, f, r, d, cut)
+            });
         for r in results {
             r?;
         }
@@ -409,19 +385,15 @@ impl VecEnv {
     }
 }
 
-fn opp_chunk(opp: &[Action], chunk: usize, per: usize) -> &[Action] {
-    let n = per * PLAYERS_PER_TEAM;
-    let start = (chunk * n).min(opp.len());
-    &opp[start..(start + n).min(opp.len())]
-}
-
+/// One control tick of one match, with its rows of the batch's buffers;
+/// a match that ends restarts with its next episode.
 #[allow(clippy::too_many_arguments)]
-fn step_chunk(
+fn step_match(
     cfg: &MatchConfig,
     env: &EnvConfig,
     scale: &ObsScale,
     mix: &Mix,
-    slots: &mut [Slot],
+    slot: &mut Slot,
     actions: &[usize],
     opp_actions: &[Action],
     feats: &mut [f32],
@@ -429,37 +401,19 @@ fn step_chunk(
     dones: &mut [bool],
     (truncated, final_feats): (&mut [bool], &mut [f32]),
 ) -> Result<(), LearnError> {
-    let l = env.learners.len();
-    for (j, slot) in slots.iter_mut().enumerate() {
-        // A network opponent's actions came from its batched forward pass.
-        let opp = mix.kinds[slot.opp]
-            .is_none()
-            .then(|| &opp_actions[j * PLAYERS_PER_TEAM..(j + 1) * PLAYERS_PER_TEAM]);
-        let done = slot.step(
-            env,
-            &actions[j * l..(j + 1) * l],
-            opp,
-            &mut rewards[j * l..(j + 1) * l],
-        );
-        dones[j * l..(j + 1) * l].fill(done);
-        let cut = done && !slot.game.match_ref().is_finished();
-        truncated[j * l..(j + 1) * l].fill(cut);
-        if cut {
-            slot.encode_learners(
-                &env.learners,
-                scale,
-                &mut final_feats[j * l * OBS_DIM..(j + 1) * l * OBS_DIM],
-            );
-        }
-        if done {
-            slot.restart(cfg, env, mix)?;
-        }
-        slot.encode_learners(
-            &env.learners,
-            scale,
-            &mut feats[j * l * OBS_DIM..(j + 1) * l * OBS_DIM],
-        );
+    // A network opponent's actions came from its batched forward pass.
+    let opp = mix.kinds[slot.opp].is_none().then_some(opp_actions);
+    let done = slot.step(env, actions, opp, rewards);
+    dones.fill(done);
+    let cut = done && !slot.game.match_ref().is_finished();
+    truncated.fill(cut);
+    if cut {
+        slot.encode_learners(&env.learners, scale, final_feats);
     }
+    if done {
+        slot.restart(cfg, env, mix)?;
+    }
+    slot.encode_learners(&env.learners, scale, feats);
     Ok(())
 }
 

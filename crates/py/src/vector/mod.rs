@@ -24,11 +24,15 @@
 //! match, an episode that ends) a finished match stays as it ended, to be
 //! looked at and drawn, and stepping refuses until the next reset.
 //!
-//! The slots are stepped by a [`Pool`] of threads started at the first
-//! reset and stopped when the env is dropped: every slot is stepped on its
-//! own, so the matches come out the same whatever the number of threads.
+//! The slots are stepped by the threads every batch of matches is stepped
+//! by (a [`Stepper`], as in evaluations and training), started at the
+//! first reset and stopped when the env is dropped: every slot is stepped
+//! on its own, so the matches come out the same whatever the number of
+//! threads. A panic while stepping a slot is caught there and reported as
+//! [`VecEnvError::Panicked`].
 
-use std::sync::{Arc, MutexGuard};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::Arc;
 
 use naosoccer_eval::eval::Side;
 use naosoccer_policy::actions::{to_action, SupportSpot};
@@ -37,7 +41,7 @@ use naosoccer_policy::{DecisionConfig, NetAction, ObsScale, PolicyError};
 use naosoccer_proto::{MatchStats, Observation, RobotId, Score, Team, PLAYERS_PER_TEAM, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig, MatchError, Scenario};
 
-use crate::pool::Pool;
+use naosoccer_eval::run::Stepper;
 
 mod setup;
 mod slot;
@@ -187,8 +191,10 @@ pub struct VecMatches {
     /// The opponents' spec as resolved ([`VecMatches::opponent`]).
     opponent_spec: Option<String>,
     threads: usize,
-    /// The slots and the threads that step them, from the first reset on.
-    pool: Option<Pool<Slot>>,
+    /// The slots, from the first reset on.
+    slots: Vec<Slot>,
+    /// The threads that step them, from the first reset on.
+    stepper: Option<Stepper>,
     /// A panic's message while stepping, until the next reset.
     panicked: Option<String>,
     /// Action indices per row, kept to hand a trained opponent its share.
@@ -272,7 +278,8 @@ impl VecMatches {
             opponent,
             opponent_spec,
             threads: spec.threads.max(1),
-            pool: None,
+            slots: Vec::new(),
+            stepper: None,
             panicked: None,
             opp_actions: Vec::new(),
         })
@@ -334,21 +341,10 @@ impl VecMatches {
                 Ok(slot)
             })
             .collect::<Result<Vec<_>, VecEnvError>>()?;
-        match &self.pool {
-            Some(pool) => {
-                for (i, slot) in slots.into_iter().enumerate() {
-                    *pool.lock(i) = slot;
-                }
-            }
-            None => {
-                let setup = Arc::clone(setup);
-                let pool = Pool::new(slots, self.threads, move |slot: &mut Slot| {
-                    slot.out.error = step_slot(&setup, slot).err();
-                })
-                .map_err(VecEnvError::Thread)?;
-                self.pool = Some(pool);
-            }
+        if self.stepper.is_none() {
+            self.stepper = Some(Stepper::new(self.threads()).map_err(VecEnvError::Thread)?);
         }
+        self.slots = slots;
         self.panicked = None;
         let mut out = StepOut::new(&self.setup);
         for (i, slot) in self.slots().enumerate() {
@@ -362,14 +358,14 @@ impl VecMatches {
     /// in `finished` and restarted; `obs` and `masks` are then the new
     /// match's.
     pub fn step(&mut self, actions: &[i64]) -> Result<StepOut, VecEnvError> {
-        let Some(pool) = &mut self.pool else {
+        let Some(stepper) = &self.stepper else {
             return Err(VecEnvError::Config("step before reset".into()));
         };
         if let Some(message) = &self.panicked {
             return Err(VecEnvError::Panicked(message.clone()));
         }
         let setup = &*self.setup;
-        if let Some(slot) = (0..pool.len()).find(|&i| pool.lock(i).ended) {
+        if let Some(slot) = self.slots.iter().position(|s| s.ended) {
             return Err(VecEnvError::Ended { slot });
         }
         let rows = setup.robots.len();
@@ -395,9 +391,7 @@ impl VecMatches {
         let spot = setup
             .decision
             .map_or(SupportSpot::default(), |d| d.support_spot);
-        for (i, acts) in actions.chunks_exact(rows).enumerate() {
-            let mut slot = pool.lock(i);
-            let slot = &mut *slot;
+        for (slot, acts) in self.slots.iter_mut().zip(actions.chunks_exact(rows)) {
             for (r, &a) in setup.robots.iter().zip(acts) {
                 let a = NetAction::from_index(a as usize).expect("actions are checked above");
                 let a = to_action(a, &slot.game.observations()[r.index()], half, spot);
@@ -410,8 +404,8 @@ impl VecMatches {
         {
             let team = own.other();
             let base = team.index() * PLAYERS_PER_TEAM;
-            let mut slots: Vec<MutexGuard<Slot>> = (0..pool.len()).map(|i| pool.lock(i)).collect();
-            let teams: Vec<(u64, &[Observation])> = slots
+            let teams: Vec<(u64, &[Observation])> = self
+                .slots
                 .iter()
                 .map(|s| {
                     let g = &s.game;
@@ -424,7 +418,7 @@ impl VecMatches {
             self.opp_actions.resize(teams.len() * PLAYERS_PER_TEAM, 0);
             policy.act_matches(&teams, &mut self.opp_actions);
             drop(teams);
-            for (i, slot) in slots.iter_mut().enumerate() {
+            for (i, slot) in self.slots.iter_mut().enumerate() {
                 for p in 0..PLAYERS_PER_TEAM {
                     let a = policy.action(
                         self.opp_actions[i * PLAYERS_PER_TEAM + p],
@@ -434,14 +428,25 @@ impl VecMatches {
                 }
             }
         }
-        if let Err(message) = pool.run() {
+        // A panic is caught in its slot; the other slots still step.
+        let panics =
+            stepper.map(
+                self.slots.iter_mut().collect(),
+                |slot: &mut Slot| match catch_unwind(AssertUnwindSafe(|| step_slot(setup, slot))) {
+                    Ok(r) => {
+                        slot.out.error = r.err();
+                        None
+                    }
+                    Err(payload) => Some(panic_message(&*payload)),
+                },
+            );
+        if let Some(message) = panics.into_iter().flatten().next() {
             self.panicked = Some(message.clone());
             return Err(VecEnvError::Panicked(message));
         }
         let mut out = StepOut::new(setup);
         let mut error = None;
-        for i in 0..pool.len() {
-            let mut slot = pool.lock(i);
+        for (i, slot) in self.slots.iter_mut().enumerate() {
             out.copy_rows(i, &slot.out);
             out.terminated[i] = slot.out.terminated;
             out.finished.extend(slot.out.finished.take());
@@ -455,11 +460,9 @@ impl VecMatches {
         }
     }
 
-    /// The slots, in order, each locked in turn (none before the first
-    /// reset).
-    fn slots(&self) -> impl Iterator<Item = MutexGuard<'_, Slot>> + '_ {
-        let pool = self.pool.as_ref();
-        (0..pool.map_or(0, |p| p.len())).filter_map(move |i| pool.map(|p| p.lock(i)))
+    /// The slots, in order (none before the first reset).
+    fn slots(&self) -> impl Iterator<Item = &Slot> + '_ {
+        self.slots.iter()
     }
 
     /// The state hash of each slot's current match.
@@ -495,8 +498,7 @@ impl VecMatches {
     /// `f` of slot `slot`'s current match (as it ended, without restarts),
     /// `None` before the first reset or for a slot out of range.
     pub fn with_match<R>(&self, slot: usize, f: impl FnOnce(&Match) -> R) -> Option<R> {
-        let pool = self.pool.as_ref()?;
-        (slot < pool.len()).then(|| f(pool.lock(slot).game.match_ref()))
+        self.slots.get(slot).map(|s| f(s.game.match_ref()))
     }
 
     /// Appends each slot's global state ([`crate::state`], `STATE_DIM`
@@ -545,3 +547,14 @@ impl StepOut {
 
 #[cfg(test)]
 mod tests;
+
+/// A caught panic's message.
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        (*s).to_owned()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "a panic without a message".to_owned()
+    }
+}
