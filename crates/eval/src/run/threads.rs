@@ -12,10 +12,13 @@
 
 use std::sync::{Mutex, PoisonError};
 
-/// Threads stepping the items of a batch, tick after tick.
+/// Threads stepping the items of a batch, tick after tick. Dropping it
+/// stops its workers and waits for them to end.
 pub struct Stepper {
     /// The workers beside the caller (`None`: one thread, the caller's).
     pool: Option<rayon::ThreadPool>,
+    /// The workers' threads, joined when the stepper is dropped.
+    workers: Vec<std::thread::JoinHandle<()>>,
     threads: usize,
 }
 
@@ -25,18 +28,38 @@ impl Stepper {
     /// started now.
     pub fn new(threads: usize) -> std::io::Result<Stepper> {
         let threads = threads.max(1);
+        let mut workers = Vec::new();
         let pool = if threads == 1 {
             None
         } else {
-            Some(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads - 1)
-                    .thread_name(|i| format!("naosoccer-step-{}", i + 1))
-                    .build()
-                    .map_err(std::io::Error::other)?,
-            )
+            // rayon's own threads end some time after the pool is dropped;
+            // these are joined, so that a closed Python env has none left.
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads - 1)
+                .thread_name(|i| format!("naosoccer-step-{}", i + 1))
+                .spawn_handler(|worker| {
+                    let mut b = std::thread::Builder::new();
+                    if let Some(name) = worker.name() {
+                        b = b.name(name.to_owned());
+                    }
+                    if let Some(size) = worker.stack_size() {
+                        b = b.stack_size(size);
+                    }
+                    workers.push(b.spawn(|| worker.run())?);
+                    Ok(())
+                })
+                .build();
+            match pool {
+                Ok(pool) => Some(pool),
+                // The pool stops the workers it started when it fails.
+                Err(e) => return Err(std::io::Error::other(e)),
+            }
         };
-        Ok(Stepper { pool, threads })
+        Ok(Stepper {
+            pool,
+            workers,
+            threads,
+        })
     }
 
     /// The threads stepping items, the caller's included.
@@ -104,6 +127,16 @@ impl Stepper {
     }
 }
 
+impl Drop for Stepper {
+    fn drop(&mut self) {
+        drop(self.pool.take());
+        for w in self.workers.drain(..) {
+            // A worker's panics are caught by rayon; it ends when told to.
+            let _ = w.join();
+        }
+    }
+}
+
 impl std::fmt::Debug for Stepper {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Stepper")
@@ -132,6 +165,30 @@ mod tests {
             let squares = stepper.map((0..7u64).collect(), |x| x * x);
             assert_eq!(squares, [0, 1, 4, 9, 16, 25, 36], "threads {threads}");
         }
+    }
+
+    /// Dropping the stepper ends its workers: none is left after `drop`.
+    #[test]
+    fn dropping_the_stepper_ends_its_workers() {
+        let alive = std::sync::Arc::new(());
+        let stepper = Stepper::new(3).unwrap();
+        let mut items = vec![0u8; 6];
+        let held = std::sync::Arc::clone(&alive);
+        // Every worker keeps a clone of `alive` in a thread-local until it
+        // ends.
+        thread_local!(static HOLD: std::cell::RefCell<Option<std::sync::Arc<()>>> = const { std::cell::RefCell::new(None) });
+        stepper.for_each(&mut items, |x| {
+            *x += 1;
+            HOLD.with(|h| *h.borrow_mut() = Some(std::sync::Arc::clone(&held)));
+        });
+        HOLD.with(|h| *h.borrow_mut() = None);
+        drop(held);
+        drop(stepper);
+        assert_eq!(
+            std::sync::Arc::strong_count(&alive),
+            1,
+            "every worker ended"
+        );
     }
 
     /// A panic in a step reaches the caller, and the stepper works on.
