@@ -29,6 +29,9 @@ impl Stepper {
     pub fn new(threads: usize) -> std::io::Result<Stepper> {
         let threads = threads.max(1);
         let mut workers = Vec::new();
+        // Workers that have started (and are named: a thread names itself
+        // before it runs its closure).
+        let started = std::sync::Arc::new((Mutex::new(0usize), std::sync::Condvar::new()));
         let pool = if threads == 1 {
             None
         } else {
@@ -45,12 +48,27 @@ impl Stepper {
                     if let Some(size) = worker.stack_size() {
                         b = b.stack_size(size);
                     }
-                    workers.push(b.spawn(|| worker.run())?);
+                    let started = std::sync::Arc::clone(&started);
+                    workers.push(b.spawn(move || {
+                        *started.0.lock().unwrap_or_else(PoisonError::into_inner) += 1;
+                        started.1.notify_all();
+                        worker.run()
+                    })?);
                     Ok(())
                 })
                 .build();
             match pool {
-                Ok(pool) => Some(pool),
+                Ok(pool) => {
+                    // Returns with every worker running: the stepper's
+                    // threads are there from here on.
+                    let (count, cv) = &*started;
+                    let mut n = count.lock().unwrap_or_else(PoisonError::into_inner);
+                    while *n < workers.len() {
+                        n = cv.wait(n).unwrap_or_else(PoisonError::into_inner);
+                    }
+                    drop(n);
+                    Some(pool)
+                }
                 // The pool stops the workers it started when it fails.
                 Err(e) => return Err(std::io::Error::other(e)),
             }
