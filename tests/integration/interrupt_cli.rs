@@ -51,6 +51,25 @@ fn libc_sigint() -> u32 {
     2
 }
 
+/// `cmd` with Ctrl-C's default action restored in the child. A shell that
+/// starts a command in the background without job control (`scripts/test &`
+/// in a script) ignores SIGINT in it, the programs it starts inherit that,
+/// and `train`, which keeps the default action (it stops at once and
+/// resumes from its last checkpoint), would then not stop: the test would
+/// depend on how the suite was started.
+#[cfg(all(target_os = "linux", feature = "train"))]
+fn with_default_sigint(cmd: &mut std::process::Command) -> &mut std::process::Command {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: between fork and exec the closure calls only signal(2), which
+    // is async-signal-safe, and touches no memory of the parent.
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::signal(libc::SIGINT, libc::SIG_DFL);
+            Ok(())
+        })
+    }
+}
+
 fn interrupt(child: &Child) {
     let ok = std::process::Command::new("kill")
         .args(["-INT", &child.id().to_string()])
@@ -241,7 +260,7 @@ epochs = 1
     assert!(out.status.success(), "{}", text(&out));
 
     let cut = run("cut");
-    let child = naosoccer_cmd()
+    let child = with_default_sigint(&mut naosoccer_cmd())
         .args(["train", "--recipe", recipe.to_str().unwrap(), "--out"])
         .arg(&cut)
         .args(["--seed", "4"])
