@@ -10,7 +10,8 @@
 //! thread steps which match changes no result: the thread count changes
 //! speed only.
 
-use std::sync::{Mutex, PoisonError};
+use std::sync::{Arc, Condvar, Mutex, PoisonError};
+use std::thread::JoinHandle;
 
 /// Threads stepping the items of a batch, tick after tick. Dropping it
 /// stops its workers and waits for them to end.
@@ -18,7 +19,7 @@ pub struct Stepper {
     /// The workers beside the caller (`None`: one thread, the caller's).
     pool: Option<rayon::ThreadPool>,
     /// The workers' threads, joined when the stepper is dropped.
-    workers: Vec<std::thread::JoinHandle<()>>,
+    workers: Vec<JoinHandle<()>>,
     threads: usize,
 }
 
@@ -28,50 +29,11 @@ impl Stepper {
     /// started now.
     pub fn new(threads: usize) -> std::io::Result<Stepper> {
         let threads = threads.max(1);
-        let mut workers = Vec::new();
-        // Workers that have started (and are named: a thread names itself
-        // before it runs its closure).
-        let started = std::sync::Arc::new((Mutex::new(0usize), std::sync::Condvar::new()));
-        let pool = if threads == 1 {
-            None
+        let (pool, workers) = if threads == 1 {
+            (None, Vec::new())
         } else {
-            // rayon's own threads end some time after the pool is dropped;
-            // these are joined, so that a closed Python env has none left.
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads - 1)
-                .thread_name(|i| format!("naosoccer-step-{}", i + 1))
-                .spawn_handler(|worker| {
-                    let mut b = std::thread::Builder::new();
-                    if let Some(name) = worker.name() {
-                        b = b.name(name.to_owned());
-                    }
-                    if let Some(size) = worker.stack_size() {
-                        b = b.stack_size(size);
-                    }
-                    let started = std::sync::Arc::clone(&started);
-                    workers.push(b.spawn(move || {
-                        *started.0.lock().unwrap_or_else(PoisonError::into_inner) += 1;
-                        started.1.notify_all();
-                        worker.run()
-                    })?);
-                    Ok(())
-                })
-                .build();
-            match pool {
-                Ok(pool) => {
-                    // Returns with every worker running: the stepper's
-                    // threads are there from here on.
-                    let (count, cv) = &*started;
-                    let mut n = count.lock().unwrap_or_else(PoisonError::into_inner);
-                    while *n < workers.len() {
-                        n = cv.wait(n).unwrap_or_else(PoisonError::into_inner);
-                    }
-                    drop(n);
-                    Some(pool)
-                }
-                // The pool stops the workers it started when it fails.
-                Err(e) => return Err(std::io::Error::other(e)),
-            }
+            let (pool, workers) = joined_pool(threads - 1)?;
+            (Some(pool), workers)
         };
         Ok(Stepper {
             pool,
@@ -143,6 +105,46 @@ impl Stepper {
             take(true);
         });
     }
+}
+
+/// A rayon pool of `n` named workers, returned once every one of them is
+/// running, and the workers' threads. rayon's own threads end some time
+/// after the pool is dropped; these can be joined, so that a closed Python
+/// env has none left.
+fn joined_pool(n: usize) -> std::io::Result<(rayon::ThreadPool, Vec<JoinHandle<()>>)> {
+    let mut workers = Vec::new();
+    // Workers that have started (and are named: a thread names itself
+    // before it runs its closure).
+    let started = Arc::new((Mutex::new(0usize), Condvar::new()));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .thread_name(|i| format!("naosoccer-step-{}", i + 1))
+        .spawn_handler(|worker| {
+            let mut b = std::thread::Builder::new();
+            if let Some(name) = worker.name() {
+                b = b.name(name.to_owned());
+            }
+            if let Some(size) = worker.stack_size() {
+                b = b.stack_size(size);
+            }
+            let started = Arc::clone(&started);
+            workers.push(b.spawn(move || {
+                *started.0.lock().unwrap_or_else(PoisonError::into_inner) += 1;
+                started.1.notify_all();
+                worker.run()
+            })?);
+            Ok(())
+        })
+        .build()
+        // The pool stops the workers it started when it fails.
+        .map_err(std::io::Error::other)?;
+    let (count, cv) = &*started;
+    let mut running = count.lock().unwrap_or_else(PoisonError::into_inner);
+    while *running < workers.len() {
+        running = cv.wait(running).unwrap_or_else(PoisonError::into_inner);
+    }
+    drop(running);
+    Ok((pool, workers))
 }
 
 impl Drop for Stepper {
