@@ -92,8 +92,10 @@ def test_defaults_are_the_shipped_teams():
     assert env.action_space("blue_2").n == 9
     assert infos["blue_0"]["action_mask"].dtype == np.int8
     # `like` gives a team's layout; explicit arguments win.
-    like = naosoccer.parallel_env(like="assets/policies/dqn-team-seed1")
+    like = naosoccer.parallel_env(like="assets/policies/dqn-team-v1-seed1")
     assert (like.obs_version, like.num_actions) == (2, 5)
+    like = naosoccer.parallel_env(like="assets/policies/dqn-team-seed1")
+    assert (like.obs_version, like.num_actions) == (2, 9)
     paper = naosoccer.parallel_env(like=TEAM, obs_version=1, decision=None)
     assert (paper.obs_version, paper.num_actions, paper.decision) == (1, 5, None)
 

@@ -793,7 +793,8 @@ fn physics_is_plausible_over_matches_16_to_20() {
 /// --seed N` plays them with the default config: seeds 1-12 scripted
 /// against scripted, 18-20 `ppo:assets/policies/ppo-team-v4-seed1` (blue,
 /// shipped as `ppo-team-seed1` when the audit was made)
-/// against scripted, 23 `dqn:assets/policies/dqn-team-seed1` against
+/// against scripted, 23 `dqn:assets/policies/dqn-team-v1-seed1` (shipped
+/// as `dqn-team-seed1` when the audit was made) against
 /// `random`. Before the fixes: robots stood on others (seed 7 tick 726,
 /// 12.5 cm for 5.2 s; seeds 4, 6, 11), rollers crossed (seed 18 tick 4138),
 /// falling robots overlapped (seeds 6 and 10), and balls that had left the
@@ -814,7 +815,7 @@ fn issue_39_the_audited_matches_are_plausible() {
         };
         let (blue, red) = match seed {
             18..=20 => ("ppo:assets/policies/ppo-team-v4-seed1", "scripted"),
-            23 => ("dqn:assets/policies/dqn-team-seed1", "random"),
+            23 => ("dqn:assets/policies/dqn-team-v1-seed1", "random"),
             _ => ("scripted", "scripted"),
         };
         let policies = RobotId::all()
