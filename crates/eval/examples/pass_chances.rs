@@ -15,7 +15,6 @@
 //! The team plays blue in every match; match seeds are 1, 2, ... N (the
 //! team's own sampling is keyed by them as in `eval`).
 
-use std::f32::consts::{PI, TAU};
 use std::ops::ControlFlow;
 use std::process::ExitCode;
 
@@ -23,6 +22,7 @@ use naosoccer_eval::eval::LONG_PASS_METRES;
 use naosoccer_eval::run::{play_one, Fixture, Side};
 use naosoccer_policy::obs::KickReach;
 use naosoccer_proto::{pass_receiver, Action, Event, Observation, Team, PLAYERS_PER_TEAM};
+use naosoccer_referee::rules::wrap_angle;
 use naosoccer_referee::MatchConfig;
 
 /// Distance rows of the "no receiver" table (upper bounds, m).
@@ -61,8 +61,7 @@ impl Tally {
             .filter(|&(j, r)| j != me && !r.fallen)
             .map(|(_, r)| {
                 let (dx, dy) = (r.x - obs.ball.x, r.y - obs.ball.y);
-                let off = (dy.atan2(dx) - heading + PI).rem_euclid(TAU) - PI;
-                (off.abs(), dx.hypot(dy))
+                (wrap_angle(dy.atan2(dx) - heading).abs(), dx.hypot(dy))
             })
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match nearest {
