@@ -16,7 +16,7 @@ from typing import Any, Dict, List, Optional, Tuple, Union
 PROTOCOL_NAME = "naosoccer"
 #: The protocol version this package speaks. The server must agree on the
 #: major version; a newer minor version only adds optional fields and types.
-PROTOCOL_VERSION = (1, 5)
+PROTOCOL_VERSION = (1, 6)
 
 HEADER_LEN = 4
 #: The server's default cap on a frame's payload; ``welcome`` announces the

@@ -87,7 +87,7 @@ def test_action_message_uses_wire_names_and_passes_bad_values_through():
 def test_hello_names_the_protocol_and_version():
     h = protocol.hello("t")
     assert h["type"] == "hello" and h["protocol"] == "naosoccer"
-    assert h["version"] == {"major": 1, "minor": 5}
+    assert h["version"] == {"major": 1, "minor": 6}
 
 
 def test_error_carries_the_server_fields():

@@ -82,11 +82,12 @@ pub fn run(args: ClientArgs) -> anyhow::Result<()> {
         end.match_id, end.reason, end.tick, end.score.blue, end.score.red
     );
     println!(
-        "{team}: goals {}, ball control {:.1}% ({} ticks), passes {}, shots {}, falls {}, out of bounds {}, missed ticks {}",
+        "{team}: goals {}, ball control {:.1}% ({} ticks), passes {} ({} aimed), shots {}, falls {}, out of bounds {}, missed ticks {}",
         s.goals,
         100.0 * s.control_rate,
         s.control_ticks,
         s.passes,
+        s.aimed_passes,
         s.shots,
         s.falls,
         s.out_of_bounds,

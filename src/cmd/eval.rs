@@ -43,8 +43,10 @@ evaluation never plays a match a training run played, whatever the seeds
 With --both-sides the odd-numbered matches swap the sides (the --blue team
 plays red); the table and the JSON still report each team under its own
 name, with its record as blue and as red. Prints average goals, ball-control
-rate, passes, passes of 1 m or more (from the kick to where the receiver took
-control; most passes are shorter, a kick into a teammate at the ball), shots
+rate, passes, aimed passes (whose kick was the action pass swung toward a
+receiver, not a shot a teammate happened to reach), passes of 1 m or more
+(from the kick to where the receiver took control; most passes are shorter,
+a kick into a teammate at the ball), shots
 (mean ± 95% CI over matches), wins/draws/losses and the win rate with its
 Wilson 95% interval per team.
 
@@ -52,7 +54,7 @@ Blocks: --first-match I --matches N plays matches I to I+N-1 of the
 evaluation (the same seeds and sides as in one run of I+N matches), and
 reports them alone. --json lists every match in \"results\": its global
 index, seed, whether it was swapped, both teams' goals, ball control,
-passes, long_passes (1 m or more) and shots (the --blue team first) and its final state hash, with
+passes, aimed_passes, long_passes (1 m or more) and shots (the --blue team first) and its final state hash, with
 \"first_match\" and \"config_hash\" (a hash of the match configuration).
 --merge FILE.json... reads such --json outputs of one evaluation (same
 teams, seed, seed scheme, --both-sides, match length and configuration) and

@@ -22,7 +22,8 @@ With --json, stdout holds exactly one JSON object:
   {\"seed\", \"ticks\", \"sim_seconds\", \"wall_seconds\",
    \"score\": {\"blue\", \"red\"},
    \"stats\": {\"blue\": {\"goals\", \"goals_open_play\", \"goals_restart\", \"goals_own_goal\",
-     \"goals_disallowed\", \"control_rate\", \"passes\", \"shots\", \"falls\", \"out_of_bounds\", ...},
+     \"goals_disallowed\", \"control_rate\", \"passes\", \"aimed_passes\", \"shots\", \"falls\",
+     \"out_of_bounds\", ...},
      \"red\": {...}},
    \"state_hash\"}
 state_hash is the final match state's hash as 16 hex digits: the same seed,
@@ -30,8 +31,9 @@ config and policies give the same hash on the same build.
 
 Statistics: control_rate is the share of the ticks in which any team controlled
 the ball (the paper's if_c) that this team did; a pass is possession moving
-between teammates after a kick by the first; shots count every kick that moved
-the ball; out_of_bounds counts the team's robots that left the field and the
+between teammates after a kick by the first, aimed_passes those whose kick was
+the action pass swung toward a receiver (not a shot a teammate happened to
+reach); shots count every kick that moved the ball; out_of_bounds counts the team's robots that left the field and the
 balls it put out (last touch). Goals by phase: goals_open_play,
 goals_restart (from the team's own kick-off or set play: only its robots touched
 the ball since, within 15 s) and goals_own_goal (the other team's own goals) sum
@@ -409,6 +411,7 @@ fn print_table(args: &MatchArgs, o: &MatchOutcome) {
         format!("{:.1}%", 100.0 * t.control_rate)
     });
     row("passes", &|t| t.passes.to_string());
+    row("  aimed", &|t| t.aimed_passes.to_string());
     row("shots", &|t| t.shots.to_string());
     row("falls", &|t| t.falls.to_string());
     row("out of bounds", &|t| t.out_of_bounds.to_string());

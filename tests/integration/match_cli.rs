@@ -38,6 +38,7 @@ fn json_is_one_object_with_the_documented_fields() {
             "goals",
             "control_rate",
             "passes",
+            "aimed_passes",
             "shots",
             "falls",
             "out_of_bounds",

@@ -341,6 +341,7 @@ fn finished_dict<'py>(
         s.set_item("goals", t.goals)?;
         s.set_item("control_rate", t.control_rate)?;
         s.set_item("passes", t.passes)?;
+        s.set_item("aimed_passes", t.aimed_passes)?;
         s.set_item("shots", t.shots)?;
         s.set_item("falls", t.falls)?;
         s.set_item("out_of_bounds", t.out_of_bounds)?;

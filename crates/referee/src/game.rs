@@ -76,6 +76,10 @@ pub struct Match {
     /// The shaping terms of the last tick's reward, by robot index: the
     /// potential-based terms and the pass bonus (see `RewardConfig`).
     shaping: [f32; ROBOTS],
+    /// The teammate each robot's latest `pass` was swung toward, set with
+    /// the sim's pass target (a kick's `receiver`). Reported, never read by
+    /// the rules: the sim's hashed pass target and aim decide the kick.
+    receivers: [Option<RobotId>; ROBOTS],
     outcome: Outcome,
 }
 
@@ -126,6 +130,7 @@ impl Match {
             stats: MatchStats::default(),
             last_goal: None,
             shaping: [0.0; ROBOTS],
+            receivers: [None; ROBOTS],
             outcome: Outcome::default(),
             cfg: cfg.clone(),
         };
@@ -211,11 +216,13 @@ impl Match {
                 // client would choose it (`proto::pass_receiver`).
                 let robot = RobotId::from_index(i).expect("a robot index");
                 let obs = self.observe(robot.team(), robot.player());
-                let target = naosoccer_proto::pass_receiver(&obs).map(|j| {
+                let receiver = naosoccer_proto::pass_receiver(&obs);
+                let target = receiver.map(|j| {
                     let r =
                         &self.sim.snapshot().robots[robot.team().index() * PLAYERS_PER_TEAM + j];
                     [r.pos[0], r.pos[1]]
                 });
+                self.receivers[i] = receiver.and_then(|j| RobotId::new(robot.team(), j));
                 self.sim.set_pass_target(i, target);
             }
             self.sim.set_command(i, cmd);
@@ -231,12 +238,18 @@ impl Match {
             let ball = [snap.ball.pos[0], snap.ball.pos[1]];
             for k in &snap.kicks {
                 if let Some(robot) = RobotId::from_index(k.robot) {
+                    let receiver = if k.aimed {
+                        self.receivers[k.robot]
+                    } else {
+                        None
+                    };
                     self.outcome.events.push(Event::Kick {
                         tick,
                         robot,
                         speed: k.speed,
+                        receiver,
                     });
-                    self.pass.kick(robot, ball);
+                    self.pass.kick(robot, ball, receiver.is_some());
                     if self.cfg.reward.aim > 0.0 {
                         aimed[k.robot] |=
                             aims_at_teammate(&self.cfg.reward, snap, &self.fall.down(), robot);
@@ -436,7 +449,11 @@ fn apply_stats(stats: &mut MatchStats, e: &Event) {
         }
         Event::GoalDisallowed { team, .. } => stats.team_mut(team).goals_disallowed += 1,
         Event::Kick { robot, .. } => stats.team_mut(robot.team()).shots += 1,
-        Event::Pass { from, .. } => stats.team_mut(from.team()).passes += 1,
+        Event::Pass { from, aimed, .. } => {
+            let t = stats.team_mut(from.team());
+            t.passes += 1;
+            t.aimed_passes += u32::from(aimed);
+        }
         Event::Fall { robot, .. } => stats.team_mut(robot.team()).falls += 1,
         // A ball out counts against the team that touched it last.
         Event::BallOut {

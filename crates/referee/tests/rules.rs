@@ -1154,8 +1154,8 @@ fn ahead_pays_a_robot_ahead_of_the_ball_while_its_team_has_it() {
 /// A kicker at (-1, 0) facing +x with the ball at its feet, one teammate at
 /// `mate` facing the ball; returns the tick's events over 8 s of `action`
 /// (held until the kick) then `stay`, and the ball's first velocity after
-/// the kick.
-fn kick_with(action: Action, mate: (f32, f32)) -> (Vec<Event>, [f32; 3]) {
+/// the kick, and blue's passes and aimed passes.
+fn kick_with(action: Action, mate: (f32, f32)) -> (Vec<Event>, [f32; 3], (u32, u32)) {
     let mut m = new_match(8);
     clear_the_pitch(&mut m);
     let (a, b) = (robot(Team::Blue, 1), robot(Team::Blue, 2));
@@ -1172,14 +1172,26 @@ fn kick_with(action: Action, mate: (f32, f32)) -> (Vec<Event>, [f32; 3]) {
     });
     let vel = m.sim().snapshot().ball.vel;
     events.extend(run_until(&mut m, &STAY, 80, |_, _| false));
-    (events, vel)
+    let blue = m.stats().blue;
+    (events, vel, (blue.passes, blue.aimed_passes))
+}
+
+/// The receiver of every kick event, in order.
+fn kick_receivers(events: &[Event]) -> Vec<Option<RobotId>> {
+    events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Kick { receiver, .. } => Some(*receiver),
+            _ => None,
+        })
+        .collect()
 }
 
 #[test]
 fn pass_kicks_toward_the_receiver_the_protocol_names() {
     // 2.2 m away, 0.5 rad to the left of the kicker's heading: in the cone.
     let mate = (-0.82 + 2.2 * 0.5f32.cos(), 2.2 * 0.5f32.sin());
-    let (events, v) = kick_with(Action::Pass, mate);
+    let (events, v, passes) = kick_with(Action::Pass, mate);
     let dir = v[1].atan2(v[0]);
     assert!((dir - 0.5).abs() < 0.12, "ball sent at {dir} rad, {v:?}");
     // Slower than a shot: it should roll about 0.5 m past the receiver.
@@ -1188,15 +1200,21 @@ fn pass_kicks_toward_the_receiver_the_protocol_names() {
     assert!(
         events
             .iter()
-            .any(|e| matches!(e, Event::Pass { from, to, .. }
+            .any(|e| matches!(e, Event::Pass { from, to, aimed: true, .. }
             if *from == robot(Team::Blue, 1) && *to == robot(Team::Blue, 2))),
         "{events:?}"
     );
+    // Protocol 1.6: the kick names its receiver, the pass counts as aimed.
+    assert_eq!(kick_receivers(&events), [Some(robot(Team::Blue, 2))]);
+    assert_eq!(passes, (1, 1));
     // The same teammate, a shot instead: straight ahead, no pass.
-    let (events, v) = kick_with(Action::Shoot, mate);
+    let (events, v, passes) = kick_with(Action::Shoot, mate);
     assert!(v[1].abs() < 0.3 * v[0], "{v:?}");
     assert!(!events.iter().any(|e| matches!(e, Event::Pass { .. })));
+    assert_eq!(kick_receivers(&events), [None]);
+    assert_eq!(passes, (0, 0));
     // No teammate in the cone (behind the kicker): a pass is a shot.
-    let (_, v) = kick_with(Action::Pass, (-2.5, 0.5));
+    let (events, v, _) = kick_with(Action::Pass, (-2.5, 0.5));
     assert!(v[1].abs() < 0.3 * v[0] && v[0] > 2.6, "{v:?}");
+    assert_eq!(kick_receivers(&events), [None]);
 }

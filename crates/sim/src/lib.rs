@@ -104,6 +104,10 @@ pub struct Kick {
     pub robot: usize,
     /// Ball speed imparted, m/s.
     pub speed: f32,
+    /// The kick was a `Pass` swung toward a target (`Sim::set_pass_target`),
+    /// not along the heading.
+    #[serde(default)]
+    pub aimed: bool,
 }
 
 /// Errors of building a model or a world.

@@ -134,6 +134,7 @@ impl MatchResult {
             goals: pair(&|first| self.goals_of(first)),
             control_rate_percent: [true, false].map(|first| 100.0 * team(first).control_rate),
             passes: pair(&|first| team(first).passes),
+            aimed_passes: pair(&|first| team(first).aimed_passes),
             long_passes: pair(&|first| *self.long_passes.get(self.team_of(first))),
             shots: pair(&|first| team(first).shots),
             goals_open_play: pair(&|first| team(first).goals_open_play),
@@ -160,6 +161,10 @@ pub struct MatchRecord {
     /// Each team's share of the ticks in which a team controlled the ball.
     pub control_rate_percent: [f64; 2],
     pub passes: [u32; 2],
+    /// Passes whose kick was a `pass` swung toward a receiver (protocol
+    /// 1.6's `aimed`; 0 in reports written before they were counted).
+    #[serde(default)]
+    pub aimed_passes: [u32; 2],
     /// Passes of at least [`LONG_PASS_METRES`] (0 in reports written
     /// before they were counted).
     #[serde(default)]

@@ -141,7 +141,8 @@ impl EvalReport {
         let team = |r: &TeamSummary| {
             json!({
                 "name": r.name, "goals": est(&r.goals), "control_rate_percent": est(&r.control_rate),
-                "passes": est(&r.passes), "long_passes": est(&r.long_passes), "shots": est(&r.shots),
+                "passes": est(&r.passes), "aimed_passes": est(&r.aimed_passes),
+                "long_passes": est(&r.long_passes), "shots": est(&r.shots),
                 "goals_open_play": est(&r.goals_open_play), "goals_restart": est(&r.goals_restart),
                 "goals_own_goal": est(&r.goals_own_goal), "goals_disallowed": est(&r.goals_disallowed),
                 "goals_open_play_against": est(&r.goals_open_play_against),

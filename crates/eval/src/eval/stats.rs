@@ -144,6 +144,8 @@ pub struct TeamSummary {
     /// In percent.
     pub control_rate: Estimate,
     pub passes: Estimate,
+    /// Passes whose kick was a `pass` swung toward a receiver.
+    pub aimed_passes: Estimate,
     /// Passes of at least [`LONG_PASS_METRES`](super::LONG_PASS_METRES).
     pub long_passes: Estimate,
     pub shots: Estimate,
@@ -193,6 +195,7 @@ pub fn summarise(records: &[MatchRecord], first_name: &str, second_name: &str) -
             goals: col(&|r| f64::from(r.goals[k])),
             control_rate: col(&|r| r.control_rate_percent[k]),
             passes: col(&|r| f64::from(r.passes[k])),
+            aimed_passes: col(&|r| f64::from(r.aimed_passes[k])),
             long_passes: col(&|r| f64::from(r.long_passes[k])),
             shots: col(&|r| f64::from(r.shots[k])),
             goals_open_play: col(&|r| f64::from(r.goals_open_play[k])),

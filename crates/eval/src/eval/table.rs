@@ -10,7 +10,7 @@ pub fn format_table(rows: &[TeamSummary], matches: usize, first_match: usize) ->
         .any(|r| r.as_red.matches() > 0 && r.as_blue.matches() > 0);
     let mut s = format!(
         "{matches} matches{}{}, mean ± 95% CI; win % with its Wilson 95% interval\n\
-         {:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>11} {:>20} {:>22} {:>15}\n",
+         {:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>16} {:>11} {:>20} {:>22} {:>15}\n",
         if first_match > 0 {
             format!(
                 " (numbers {first_match} to {} of the evaluation)",
@@ -28,6 +28,7 @@ pub fn format_table(rows: &[TeamSummary], matches: usize, first_match: usize) ->
         "average goals",
         "ball control %",
         "average passes",
+        "aimed passes",
         "passes >= 1 m",
         "average shots",
         "W/D/L",
@@ -37,11 +38,12 @@ pub fn format_table(rows: &[TeamSummary], matches: usize, first_match: usize) ->
     );
     for r in rows {
         s.push_str(&format!(
-            "{:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>11} {:>20} {:>22} {:>15}\n",
+            "{:<28} {:>14} {:>18} {:>16} {:>16} {:>16} {:>16} {:>11} {:>20} {:>22} {:>15}\n",
             r.name,
             format!("{:.2}", r.goals),
             format!("{:.1}", r.control_rate),
             format!("{:.2}", r.passes),
+            format!("{:.2}", r.aimed_passes),
             format!("{:.2}", r.long_passes),
             format!("{:.2}", r.shots),
             format!("{}/{}/{}", r.wins, r.draws, r.losses),

@@ -95,6 +95,7 @@ impl MatchOutcome {
                 "goals": t.goals,
                 "control_rate": t.control_rate,
                 "passes": t.passes,
+                "aimed_passes": t.aimed_passes,
                 "shots": t.shots,
                 "falls": t.falls,
                 "out_of_bounds": t.out_of_bounds,

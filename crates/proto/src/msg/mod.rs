@@ -36,7 +36,7 @@ pub const PROTOCOL_NAME: &str = "naosoccer";
 
 /// This build's protocol version. Peers must agree on `major`; a higher
 /// `minor` only adds optional fields and message types.
-pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 5 };
+pub const PROTOCOL_VERSION: Version = Version { major: 1, minor: 6 };
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Version {
@@ -243,6 +243,7 @@ mod tests {
                 tick: Tick::new(6),
                 robot: crate::types::RobotId::new(Team::Red, 2).unwrap(),
                 speed: 2.5,
+                receiver: crate::types::RobotId::new(Team::Red, 3),
             },
             crate::types::Event::HalfTime { tick: Tick::new(6) },
         ];

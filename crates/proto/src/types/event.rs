@@ -78,6 +78,11 @@ pub enum Event {
         tick: Tick,
         robot: RobotId,
         speed: f32,
+        /// The teammate a `pass` was swung toward (the pass rule's receiver
+        /// when the kick started); `None` for a shot, or a `pass` with no
+        /// receiver (protocol 1.6; `None` from older peers).
+        #[serde(default)]
+        receiver: Option<RobotId>,
     },
     /// Possession moved between two teammates after a kick by the first.
     Pass {
@@ -88,6 +93,11 @@ pub enum Event {
         /// (protocol 1.2; read as 0 from older peers).
         #[serde(default)]
         distance: f32,
+        /// `from`'s kick was a `pass` swung toward a receiver (protocol 1.6;
+        /// `false` from older peers): a deliberate pass, whichever teammate
+        /// took the ball.
+        #[serde(default)]
+        aimed: bool,
     },
     Fall {
         tick: Tick,
@@ -178,6 +188,10 @@ pub struct TeamStats {
     /// Ticks this team controlled the ball.
     pub control_ticks: u64,
     pub passes: u32,
+    /// Of `passes`, those whose kick was a `pass` swung toward a receiver
+    /// (protocol 1.6; 0 from older peers).
+    #[serde(default)]
+    pub aimed_passes: u32,
     pub shots: u32,
     pub falls: u32,
     pub out_of_bounds: u32,

@@ -14,6 +14,10 @@ pub struct PassRule {
     kicked: bool,
     /// Where the ball was when `holder` last kicked it (world frame).
     kicked_at: [f32; 2],
+    /// Whether that kick was a `pass` swung toward a receiver. Reported in
+    /// the `pass` event only; left out of the fingerprint, as the sim's
+    /// hash holds the pass target that made it.
+    aimed: bool,
 }
 
 /// A pass the rule counted.
@@ -24,6 +28,8 @@ pub struct PassMade {
     /// Ball positions at the kick and at the reception, world frame.
     pub start: [f32; 2],
     pub end: [f32; 2],
+    /// The kick was a `pass` swung toward a receiver.
+    pub aimed: bool,
 }
 
 impl PassRule {
@@ -44,15 +50,17 @@ impl PassRule {
         (holder << 1 | u64::from(self.kicked)) ^ at.rotate_left(9)
     }
 
-    /// A kick that moved the ball, which lay at `ball` (world frame). A
-    /// kicker that had not been seen in control (the ball reached its foot
-    /// between two ticks) becomes the holder.
-    pub fn kick(&mut self, robot: RobotId, ball: [f32; 2]) {
+    /// A kick that moved the ball, which lay at `ball` (world frame);
+    /// `aimed` when it was a `pass` swung toward a receiver. A kicker that
+    /// had not been seen in control (the ball reached its foot between two
+    /// ticks) becomes the holder.
+    pub fn kick(&mut self, robot: RobotId, ball: [f32; 2], aimed: bool) {
         if self.holder != Some(robot) {
             self.holder = Some(robot);
         }
         self.kicked = true;
         self.kicked_at = ball;
+        self.aimed = aimed;
     }
 
     /// The tick's controller, after the tick's kicks were reported; `ball`
@@ -78,17 +86,20 @@ impl PassRule {
                     from,
                     to,
                     distance,
+                    aimed: self.aimed,
                 });
                 made = Some(PassMade {
                     from,
                     to,
                     start,
                     end: ball,
+                    aimed: self.aimed,
                 });
             }
         }
         self.holder = Some(to);
         self.kicked = false;
+        self.aimed = false;
         made
     }
 }
@@ -116,7 +127,7 @@ mod tests {
         let mut out = Outcome::default();
         let z = [0.0, 0.0];
         rule.control(Some(a), z, Tick::new(1), &mut out);
-        rule.kick(a, [1.0, 1.0]);
+        rule.kick(a, [1.0, 1.0], true);
         rule.control(None, z, Tick::new(2), &mut out);
         let made = rule.control(Some(b), [4.0, 5.0], Tick::new(5), &mut out);
         assert_eq!(
@@ -125,7 +136,8 @@ mod tests {
                 from: a,
                 to: b,
                 start: [1.0, 1.0],
-                end: [4.0, 5.0]
+                end: [4.0, 5.0],
+                aimed: true,
             })
         );
         rule.control(Some(b), z, Tick::new(6), &mut out);
@@ -138,8 +150,47 @@ mod tests {
                 from: a,
                 to: b,
                 distance: 5.0,
+                aimed: true,
             }]
         );
+    }
+
+    #[test]
+    fn a_pass_is_aimed_by_the_last_kick_before_it() {
+        let (a, b) = (r(Team::Blue, 1), r(Team::Blue, 2));
+        let mut rule = PassRule::new();
+        let mut out = Outcome::default();
+        let z = [0.0, 0.0];
+        // An aimed kick the kicker followed and kicked again as a shot.
+        rule.control(Some(a), z, Tick::new(1), &mut out);
+        rule.kick(a, z, true);
+        rule.control(Some(a), z, Tick::new(2), &mut out);
+        rule.kick(a, z, false);
+        let made = rule.control(Some(b), z, Tick::new(3), &mut out).unwrap();
+        assert!(!made.aimed);
+        // A shot, then an aimed kick: aimed.
+        rule.kick(b, z, false);
+        rule.control(Some(b), z, Tick::new(4), &mut out);
+        rule.kick(b, z, true);
+        assert!(
+            rule.control(Some(a), z, Tick::new(5), &mut out)
+                .unwrap()
+                .aimed
+        );
+        // The fingerprint does not hold the aim (the sim's hash does).
+        let mut other = rule.clone();
+        rule.kick(a, [1.0, 2.0], true);
+        other.kick(a, [1.0, 2.0], false);
+        assert_eq!(rule.fingerprint(), other.fingerprint());
+        let aimed: Vec<bool> = out
+            .events
+            .iter()
+            .filter_map(|e| match e {
+                Event::Pass { aimed, .. } => Some(*aimed),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(aimed, [false, true]);
     }
 
     #[test]
@@ -152,12 +203,12 @@ mod tests {
         rule.control(Some(a), z, Tick::new(1), &mut out);
         rule.control(Some(b), z, Tick::new(2), &mut out);
         // Kicked, intercepted, then back to blue.
-        rule.kick(b, z);
+        rule.kick(b, z, false);
         rule.control(Some(o), z, Tick::new(3), &mut out);
         rule.control(Some(a), z, Tick::new(4), &mut out);
         assert_eq!(passes(&out), 0);
         // A restart between kick and reception.
-        rule.kick(a, z);
+        rule.kick(a, z, true);
         rule.reset();
         rule.control(Some(b), z, Tick::new(9), &mut out);
         assert_eq!(passes(&out), 0);

@@ -267,7 +267,11 @@ impl Sim {
         let after = v + n * ((1.0 + e) * (foot - vn));
         ball.set_linvel(after, true);
         let speed = Vec3::new(after.x, after.y, 0.0).length();
-        self.snapshot.kicks.push(Kick { robot: i, speed });
+        self.snapshot.kicks.push(Kick {
+            robot: i,
+            speed,
+            aimed: self.ctrl[i].kick_aim.is_some(),
+        });
         if ball_in {
             self.ctrl[i].last_touch = Some(self.steps + 1);
         }
