@@ -34,3 +34,4 @@ mod server_hardening;
 mod server_hardening_props;
 mod server_protocol_1_2;
 mod server_protocol_1_5;
+mod server_protocol_1_6;
