@@ -207,7 +207,7 @@ fn print_summary(rec: &Recording) {
                 if f.completed { "" } else { " (stopped early)" }
             );
             println!(
-                "{:<6} {:>6} {:>10} {:>8} {:>9} {:>11} {:>8} {:>7} {:>6} {:>6} {:>5}",
+                "{:<6} {:>6} {:>10} {:>8} {:>9} {:>11} {:>8} {:>7} {:>6} {:>6} {:>6} {:>5}",
                 "team",
                 "goals",
                 "open play",
@@ -216,6 +216,7 @@ fn print_summary(rec: &Recording) {
                 "disallowed",
                 "control",
                 "passes",
+                "aimed",
                 "shots",
                 "falls",
                 "outs"
@@ -223,7 +224,7 @@ fn print_summary(rec: &Recording) {
             for team in Team::BOTH {
                 let s = f.stats.team(team);
                 println!(
-                    "{:<6} {:>6} {:>10} {:>8} {:>9} {:>11} {:>7.1}% {:>7} {:>6} {:>6} {:>5}",
+                    "{:<6} {:>6} {:>10} {:>8} {:>9} {:>11} {:>7.1}% {:>7} {:>6} {:>6} {:>6} {:>5}",
                     team.to_string(),
                     s.goals,
                     s.goals_open_play,
@@ -232,6 +233,7 @@ fn print_summary(rec: &Recording) {
                     s.goals_disallowed,
                     100.0 * s.control_rate,
                     s.passes,
+                    s.aimed_passes,
                     s.shots,
                     s.falls,
                     s.out_of_bounds
