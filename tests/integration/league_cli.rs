@@ -170,8 +170,8 @@ fn bad_team_lists_are_refused_with_a_reason() {
 /// The level-against-level evaluations docs/LADDER.md reports
 /// (assets/scripted/ladder/*.json, 200 ten-minute matches each) replay: the
 /// first matches of each, played again, are the same matches, state hash
-/// for state hash (all 200 take minutes; `eval` with the file's settings
-/// replays the whole of one).
+/// for state hash and every other field the file records (all 200 take
+/// minutes; `eval` with the file's settings replays the whole of one).
 #[test]
 fn the_ladder_evaluations_replay() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scripted/ladder");
@@ -200,13 +200,20 @@ fn the_ladder_evaluations_replay() {
             "--both-sides",
             "--json",
         ]);
+        // Every field the file holds is played again exactly; fields a
+        // later build added to the report (1.6's aimed_passes) are not in
+        // files written before them.
         for i in 0..2 {
-            assert_eq!(
-                got["results"][i],
-                doc["results"][i],
-                "{} match {i}",
-                f.display()
-            );
+            let want = doc["results"][i].as_object().expect("a match record");
+            assert!(want.contains_key("state_hash"), "{}", f.display());
+            for (key, value) in want {
+                assert_eq!(
+                    &got["results"][i][key],
+                    value,
+                    "{} match {i}, {key}",
+                    f.display()
+                );
+            }
         }
     }
 }
