@@ -4,7 +4,7 @@
 use naosoccer_client::{Client, Push};
 use naosoccer_policy::PolicyKind;
 use naosoccer_proto::msg::Score;
-use naosoccer_proto::msg::{ErrorMsg, MatchEnd, Player, PlayerAction};
+use naosoccer_proto::msg::{CreateMatch, ErrorMsg, Fill, MatchEnd, MatchId, Player, PlayerAction};
 use naosoccer_proto::Action;
 use naosoccer_proto::MatchStats;
 use naosoccer_referee::MatchConfig;
@@ -139,4 +139,31 @@ pub async fn join_robot(
     .await
     .unwrap();
     c
+}
+
+/// A server whose 600-tick matches wait a long while for their clients'
+/// actions (each tick waits for blue), with one match an admin created
+/// (the other slots `idle`) and blue's four players joined to it: the
+/// server, the admin and blue connections, and the match's id.
+pub async fn blue_waits_in_an_idle_match() -> (TestServer, Client, Client, MatchId) {
+    let mut cfg = config(600);
+    cfg.deadline_ms = 600_000; // each tick waits for blue
+    let server = start(cfg).await;
+    let mut admin = Client::connect(server.addr(), "admin").await.unwrap();
+    let info = admin
+        .create_match(CreateMatch {
+            token: ADMIN.into(),
+            fill: Some(Fill::Idle),
+            start_players: Some(4),
+            ..CreateMatch::default()
+        })
+        .await
+        .unwrap();
+    let id = info.match_id;
+    let team: Vec<Player> = Player::all().collect();
+    let mut blue = Client::connect(server.addr(), "blue").await.unwrap();
+    blue.join(Some(id), naosoccer_proto::Team::Blue, BLUE, &team)
+        .await
+        .unwrap();
+    (server, admin, blue, id)
 }

@@ -190,23 +190,8 @@ async fn a_bad_scenario_is_refused_naming_the_field() {
 /// refused with its code, naming the field.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn set_state_moves_the_ball_and_a_robot() {
-    let mut cfg = config(600);
-    cfg.deadline_ms = 600_000; // each tick waits for blue
-    let server = start(cfg).await;
-    let mut admin = Client::connect(server.addr(), "admin").await.unwrap();
-    let info = admin
-        .create_match(CreateMatch {
-            token: ADMIN.into(),
-            fill: Some(Fill::Idle),
-            start_players: Some(4),
-            ..CreateMatch::default()
-        })
-        .await
-        .unwrap();
-    let id = info.match_id;
+    let (server, mut admin, mut blue, id) = blue_waits_in_an_idle_match().await;
     let team = players();
-    let mut blue = Client::connect(server.addr(), "blue").await.unwrap();
-    blue.join(Some(id), Team::Blue, BLUE, &team).await.unwrap();
     for t in 0..3 {
         assert_eq!(next_observation(&mut blue).await.tick, Tick::new(t));
         blue.send_actions(Tick::new(t), &stay(&team)).await.unwrap();

@@ -8,8 +8,8 @@
 use crate::common;
 
 use common::server::*;
-use naosoccer_client::{Client, Push};
-use naosoccer_proto::msg::{CreateMatch, Fill, MatchEnd, PlayerAction, SetState};
+use naosoccer_client::Push;
+use naosoccer_proto::msg::{MatchEnd, PlayerAction, SetState};
 use naosoccer_proto::{Action, BallPlacement, Event, RobotId, RobotPlacement, Team, Tick};
 
 /// Blue player 1 at (-1, 0) facing +x with the ball 0.18 m ahead; blue
@@ -49,23 +49,8 @@ fn pass_set_up(match_id: naosoccer_proto::msg::MatchId) -> SetState {
 /// kick is reported and `stay` for 80 ticks more, then ends the match:
 /// the kick and pass events blue received, and the `match_end`.
 async fn kick_over_the_socket(kick: Action) -> (Vec<Event>, MatchEnd) {
-    let mut cfg = config(600);
-    cfg.deadline_ms = 600_000; // each tick waits for blue
-    let server = start(cfg).await;
-    let mut admin = Client::connect(server.addr(), "admin").await.unwrap();
-    let info = admin
-        .create_match(CreateMatch {
-            token: ADMIN.into(),
-            fill: Some(Fill::Idle),
-            start_players: Some(4),
-            ..CreateMatch::default()
-        })
-        .await
-        .unwrap();
-    let id = info.match_id;
+    let (server, mut admin, mut blue, id) = blue_waits_in_an_idle_match().await;
     let team: Vec<_> = (0..4).map(p).collect();
-    let mut blue = Client::connect(server.addr(), "blue").await.unwrap();
-    blue.join(Some(id), Team::Blue, BLUE, &team).await.unwrap();
     let mut events = Vec::new();
     let mut kicked_at: Option<Tick> = None;
     loop {
