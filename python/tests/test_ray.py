@@ -183,7 +183,8 @@ def test_matches_spread_over_both_nodes(cluster, binary):
         # Two CPUs: blocks of 2, about two a CPU.
         assert default_block_for(6) == 2
         spec = EvalSpec("scripted", "idle", matches=6, seed=3, both_sides=True, minutes=0.2)
-        # Six one-match blocks: with three, SPREAD once put all on one node.
+        # Six one-match blocks, dealt to the two nodes in turn (Ray's SPREAD
+        # alone once put all six on one node).
         played = run_eval_blocks(spec, block=1)
         assert [(b.first, b.matches) for b in played] == [(i, 1) for i in range(6)]
         assert {b.node for b in played} == {n["NodeID"] for n in alive}
@@ -193,6 +194,21 @@ def test_matches_spread_over_both_nodes(cluster, binary):
         assert without_wall(doc) == without_wall(want)
     finally:
         ray.shutdown()
+
+
+def test_blocks_are_dealt_to_nodes_by_their_cpus():
+    from naosoccer.ray import node_turns
+
+    def node(name, cpus, alive=True):
+        return {"NodeID": name, "Alive": alive, "Resources": {"CPU": float(cpus), "memory": 1e9}}
+
+    assert node_turns([]) == []
+    assert node_turns([node("b", 1), node("a", 1)]) == ["a", "b"]
+    # Three CPUs against one: three turns in four; a dead node and a node
+    # without CPUs get none.
+    nodes = [node("c", 1), node("a", 3), node("d", 4, alive=False), node("e", 0)]
+    assert node_turns(nodes) == ["a", "c", "a", "a"]
+    assert node_turns([node("x", 0)]) == []
 
 
 def test_league_of_four_matches_single_machine_evals(cluster, binary, tmp_path):

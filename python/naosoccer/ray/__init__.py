@@ -32,6 +32,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence
 
 try:
     import ray
+    from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 except ImportError as e:  # pragma: no cover - depends on the installation
     raise ImportError(
         "naosoccer.ray needs Ray: pip install './python[ray]' (scripts/setup installs it)"
@@ -44,6 +45,7 @@ from ..server import BIN_ENV
 __all__ = [
     "connect",
     "default_block_for",
+    "node_turns",
     "run_eval",
     "run_eval_blocks",
     "run_eval_text",
@@ -124,6 +126,24 @@ def default_block_for(matches: int) -> int:
     return default_block(matches, ray.cluster_resources().get("CPU", 1))
 
 
+def node_turns(nodes: Sequence[Dict[str, Any]]) -> List[str]:
+    """The order in which blocks are dealt to the nodes: of the alive nodes
+    with CPUs (as ``ray.nodes()`` lists them), sorted by node id, every node
+    once a round while it has CPUs left in that round, so a node gets blocks
+    in proportion to its CPUs. Block ``k`` goes to turn ``k`` modulo the
+    length. Empty when no node has a CPU."""
+    cpus = {}
+    for n in nodes:
+        count = int((n.get("Resources") or {}).get("CPU", 0))
+        if n.get("Alive") and count > 0:
+            cpus[n["NodeID"]] = count
+    order = sorted(cpus)
+    turns: List[str] = []
+    for r in range(max(cpus.values(), default=0)):
+        turns.extend(node for node in order if cpus[node] > r)
+    return turns
+
+
 def _play_all(
     specs: Sequence[EvalSpec],
     block: Optional[int],
@@ -131,23 +151,34 @@ def _play_all(
     progress: Optional[Callable[[int, int], None]],
 ) -> List[List[Block]]:
     """Every spec's matches in blocks of ``block`` (default:
-    :func:`default_block_for` all their matches), one task a block, spread
-    over the nodes."""
+    :func:`default_block_for` all their matches), one task a block, dealt
+    to the nodes in turn (:func:`node_turns`). A task waits for its node
+    when the node is busy and goes elsewhere only when its node is gone
+    (Ray's soft node affinity), so every node plays its share even when
+    Ray's own placement would have packed the tasks on one node."""
     for spec in specs:
         spec.check()
     if block is None:
         block = default_block_for(sum(s.matches for s in specs))
-    options: Dict[str, Any] = {"scheduling_strategy": "SPREAD"}
+    options: Dict[str, Any] = {}
     if binary:
         options["runtime_env"] = {"env_vars": {BIN_ENV: binary}}
-    task = _play.options(**options)
+    turns = node_turns(ray.nodes())
     cwd = os.getcwd()
     owner = {}
     total = 0
+    dealt = 0
     for k, spec in enumerate(specs):
         for first, n in blocks(spec.matches, block):
+            if turns:
+                node = turns[dealt % len(turns)]
+                strategy: Any = NodeAffinitySchedulingStrategy(node_id=node, soft=True)
+            else:
+                strategy = "SPREAD"
+            task = _play.options(scheduling_strategy=strategy, **options)
             owner[task.remote(spec, first, n, cwd)] = (k, n)
             total += n
+            dealt += 1
     results: List[List[Block]] = [[] for _ in specs]
     pending = list(owner)
     done = 0
