@@ -70,7 +70,7 @@ pub struct TrainArgs {
         "central_critic", "minibatches", "entropy_coef", "gamma", "target_kl", "lr", "drill",
         "scenarios", "scenario_matches", "obs_version", "opponent",
         "matches", "threads", "torch_threads", "config", "minutes", "learners", "teammates",
-        "checkpoint_every", "rollout", "epochs", "shared", "n_step", "epsilon"])]
+        "checkpoint_every", "rollout", "epochs", "shared", "n_step", "epsilon", "average"])]
     recipe: Option<PathBuf>,
     /// Algorithm: dqn (the paper's Algorithm 1) or ppo (Algorithm 2).
     #[arg(long, required_unless_present_any = ["resume", "recipe"])]
@@ -302,6 +302,13 @@ pub struct TrainArgs {
     /// rate its schedule ends at).
     #[arg(long, hide = true)]
     epsilon: Option<f64>,
+    /// DQN: keep a Polyak average of the learning network's weights, each
+    /// gradient step `avg = K avg + (1 - K) net` (K in [0, 1), e.g. 0.9999),
+    /// and save that average as the team (checkpoints, final.safetensors);
+    /// the learning network's last weights go to final-online.safetensors.
+    /// The average does not change what the run learns. Default: none.
+    #[arg(long, hide = true, value_name = "K")]
+    average: Option<f64>,
 }
 
 pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
@@ -453,6 +460,14 @@ pub(crate) fn run_train(
             matches: n,
             scenarios,
         });
+    }
+    if let Some(k) = a.average {
+        anyhow::ensure!(algo == Algo::Dqn, "--average is a DQN option (--algo dqn)");
+        anyhow::ensure!(
+            (0.0..1.0).contains(&k),
+            "--average must be in [0, 1) (0: none), not {k}"
+        );
+        cfg.dqn.average = k;
     }
     if let Some(e) = a.epsilon {
         cfg.dqn.epsilon = e;

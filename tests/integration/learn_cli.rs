@@ -165,6 +165,23 @@ fn bad_input_gives_clear_errors() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("unknown DQN preset"), "{err}");
+    // A weight average: DQN only, and a fraction below 1.
+    for (args, needle) in [
+        (&["--algo", "ppo", "--average", "0.999"][..], "a DQN option"),
+        (
+            &["--algo", "dqn", "--average", "1"][..],
+            "must be in [0, 1)",
+        ),
+        (
+            &["--algo", "dqn", "--average=-0.5"][..],
+            "must be in [0, 1)",
+        ),
+    ] {
+        let out = naosoccer(&[&["train", "--out", "x"][..], args].concat());
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
 }
 
 /// The pass-aware observation layout (version 3): PPO and DQN train on it,

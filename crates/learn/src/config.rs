@@ -395,6 +395,14 @@ pub struct DqnConfig {
     pub huber: bool,
     /// Gradient-norm clip (0: none, the paper).
     pub max_grad_norm: f64,
+    /// Polyak averaging of the weights: beside each learning network an
+    /// average `avg <- average * avg + (1 - average) * net` after every
+    /// gradient step, which is the team the run saves (checkpoints,
+    /// `final.safetensors`; the learning network's last weights go to
+    /// `final-online.safetensors`). 0 (both presets): none, the learning
+    /// network is saved. The average never feeds back into learning, so a
+    /// run learns the same with it as without.
+    pub average: f64,
     /// The decision-level MDP (`None`: every robot decides every tick, the
     /// paper): a robot decides only when free, a movement holds `persist`
     /// ticks, `shoot` may be masked out of reach. A decision is one
@@ -439,6 +447,7 @@ impl DqnConfig {
             n_step: 1,
             huber: false,
             max_grad_norm: 0.0,
+            average: 0.0,
             decision: None,
         }
     }
@@ -467,6 +476,7 @@ impl DqnConfig {
             n_step: 3,
             huber: true,
             max_grad_norm: 10.0,
+            average: 0.0,
             decision: Some(DecisionConfig::team()),
         }
     }

@@ -154,6 +154,10 @@ pub fn train(
             run.checkpoint(&dqn.stores())?;
         }
     }
+    if dqn.averaging() {
+        let online = out.join("final-online.safetensors");
+        crate::policy::save_stores(&dqn.online_stores(), &online)?;
+    }
     run.finish(&dqn.stores())
 }
 
@@ -230,6 +234,9 @@ pub struct Dqn {
     /// One per learning robot, or one shared.
     pub nets: Vec<QNet>,
     targets: Vec<QNet>,
+    /// The Polyak averages of `nets` ([`DqnConfig::average`]; empty
+    /// without).
+    averages: Vec<QNet>,
     opts: Vec<nn::Optimizer>,
     replays: Vec<Replay>,
     grad_steps: Vec<usize>,
@@ -250,10 +257,22 @@ impl Dqn {
         let mut nets = Vec::with_capacity(n);
         let mut targets = Vec::with_capacity(n);
         let mut opts = Vec::with_capacity(n);
+        let mut averages = Vec::new();
+        if !(0.0..1.0).contains(&cfg.average) {
+            return Err(LearnError::Config(format!(
+                "DQN average must be in [0, 1) (0: none), not {}",
+                cfg.average
+            )));
+        }
         for i in 0..n {
             let net = QNet::with_input(input, &cfg.hidden, actions, &format!("q{i}"));
             let mut target = QNet::with_input(input, &cfg.hidden, actions, &format!("q{i}"));
             target.vs.copy(&net.vs)?;
+            if cfg.average > 0.0 {
+                let mut avg = QNet::with_input(input, &cfg.hidden, actions, &format!("q{i}"));
+                avg.vs.copy(&net.vs)?;
+                averages.push(avg);
+            }
             opts.push(nn::Adam::default().build(&net.vs, cfg.lr)?);
             nets.push(net);
             targets.push(target);
@@ -265,6 +284,7 @@ impl Dqn {
             cfg,
             nets,
             targets,
+            averages,
             opts,
             rows: Vec::new(),
             q: Vec::new(),
@@ -280,9 +300,25 @@ impl Dqn {
         }
     }
 
-    /// The networks' variables (what a checkpoint saves).
+    /// The team's variables (what a checkpoint saves and self-play
+    /// plays): the averages with [`DqnConfig::average`], else the learning
+    /// networks.
     pub fn stores(&self) -> Vec<&nn::VarStore> {
+        if self.averaging() {
+            self.averages.iter().map(|n| &n.vs).collect()
+        } else {
+            self.online_stores()
+        }
+    }
+
+    /// The learning networks' variables.
+    pub fn online_stores(&self) -> Vec<&nn::VarStore> {
         self.nets.iter().map(|n| &n.vs).collect()
+    }
+
+    /// Whether the run keeps Polyak averages ([`DqnConfig::average`]).
+    pub fn averaging(&self) -> bool {
+        !self.averages.is_empty()
     }
 
     /// Stores one (n-step) transition of learning robot slot `k`, with the
@@ -375,6 +411,9 @@ impl Dqn {
                 }
                 total += f64::try_from(&loss).unwrap_or(f64::NAN);
                 count += 1;
+                if let Some(avg) = self.averages.get(i) {
+                    polyak(&avg.vs, &self.nets[i].vs, self.cfg.average);
+                }
                 self.grad_steps[i] += 1;
                 if self.grad_steps[i].is_multiple_of(self.cfg.target_every.max(1)) {
                     // The copy cannot fail: both stores hold the same variables.
@@ -384,6 +423,18 @@ impl Dqn {
         }
         (count > 0).then(|| total / f64::from(count))
     }
+}
+
+/// `avg <- keep * avg + (1 - keep) * net`, variable by variable (both
+/// stores hold the same variables, made in the same order).
+fn polyak(avg: &nn::VarStore, net: &nn::VarStore, keep: f64) {
+    let (a, n) = (avg.trainable_variables(), net.trainable_variables());
+    debug_assert_eq!(a.len(), n.len());
+    tch::no_grad(|| {
+        for (mut a, n) in a.into_iter().zip(n) {
+            let _ = a.lerp_(&n, 1.0 - keep);
+        }
+    });
 }
 
 /// An epsilon-greedy choice from one row of Q-values (one per action):

@@ -383,3 +383,44 @@ fn configurations_without_the_new_fields_load_as_the_paper() {
 fn argmax_takes_the_first_of_ties() {
     assert_eq!(argmax(&[0.0, 3.0, 3.0, -1.0]), 1);
 }
+
+#[test]
+fn polyak_moves_the_average_toward_the_network_by_one_minus_keep() {
+    let net = QNet::with_input(OBS_DIM, &[4], 3, "q0");
+    let avg = QNet::with_input(OBS_DIM, &[4], 3, "q0");
+    let (a0, n0) = (avg.vs.trainable_variables(), net.vs.trainable_variables());
+    let before: Vec<Vec<f32>> = a0.iter().map(|t| values(&t.flatten(0, -1))).collect();
+    let online: Vec<Vec<f32>> = n0.iter().map(|t| values(&t.flatten(0, -1))).collect();
+    polyak(&avg.vs, &net.vs, 0.75);
+    let after = avg.vs.trainable_variables();
+    assert_eq!(after.len(), before.len());
+    for ((t, b), o) in after.iter().zip(&before).zip(&online) {
+        for ((x, b), o) in values(&t.flatten(0, -1)).iter().zip(b).zip(o) {
+            assert!((x - (0.75 * b + 0.25 * o)).abs() < 1e-6, "{x} vs {b}, {o}");
+        }
+    }
+    // The network it follows is left alone.
+    let still: Vec<Vec<f32>> = net
+        .vs
+        .trainable_variables()
+        .iter()
+        .map(|t| values(&t.flatten(0, -1)))
+        .collect();
+    assert_eq!(still, online);
+}
+
+#[test]
+fn an_average_outside_zero_to_one_is_refused() {
+    for bad in [-0.1, 1.0, 2.0, f64::NAN] {
+        let mut cfg = DqnConfig::team();
+        cfg.hidden = vec![8];
+        cfg.average = bad;
+        assert!(Dqn::new(cfg, 4, OBS_DIM).is_err(), "{bad}");
+    }
+    let mut cfg = DqnConfig::team();
+    cfg.hidden = vec![8];
+    cfg.average = 0.999;
+    let dqn = Dqn::new(cfg, 4, OBS_DIM).unwrap();
+    assert!(dqn.averaging());
+    assert!(!Dqn::new(DqnConfig::team(), 4, OBS_DIM).unwrap().averaging());
+}
