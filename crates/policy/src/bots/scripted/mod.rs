@@ -225,16 +225,7 @@ impl Scripted {
 
         // Walk round behind the ball; go wide when the ball is in the way.
         let u = scale(to_goal, 1.0 / norm(to_goal).max(1e-6));
-        let rel = sub(pos, ball);
-        let along = dot(rel, u);
-        let across = cross(u, rel);
-        let target = if along > -0.15 && across.abs() < 0.45 {
-            let side = if across >= 0.0 { 1.0 } else { -1.0 };
-            let perp = [-u[1] * side, u[0] * side];
-            add(ball, add(scale(perp, 0.5), scale(u, -0.15)))
-        } else {
-            sub(ball, scale(u, p.behind))
-        };
+        let target = round_the_ball(&p, pos, ball, u).unwrap_or(sub(ball, scale(u, p.behind)));
         self.go_to(me, target)
     }
 
@@ -275,17 +266,10 @@ impl Scripted {
                 (d, ball)
             } else {
                 let behind = sub(ball, scale(u, p.behind));
-                let rel = sub(pos, ball);
-                let along = dot(rel, u);
-                let across = cross(u, rel);
-                if along > -0.15 && across.abs() < 0.45 {
+                match round_the_ball(p, pos, ball, u) {
                     // The ball is in the way: round it first.
-                    let side = if across >= 0.0 { 1.0 } else { -1.0 };
-                    let perp = [-u[1] * side, u[0] * side];
-                    let wide = add(ball, add(scale(perp, 0.5), scale(u, -0.15)));
-                    (dist(pos, wide) + dist(wide, behind) + p.behind, wide)
-                } else {
-                    (dist(pos, behind) + p.behind, behind)
+                    Some(wide) => (dist(pos, wide) + dist(wide, behind) + p.behind, wide),
+                    None => (dist(pos, behind) + p.behind, behind),
                 }
             };
         let to_first = sub(first, pos);
@@ -594,11 +578,77 @@ fn nearest(robots: &[RobotObs; PLAYERS_PER_TEAM], p: [f32; 2]) -> Option<usize> 
         .map(|(_, i)| i)
 }
 
+/// Where a player at `pos` walks first when the ball at `ball` is in its
+/// way to the line-up point (`u`: the unit vector from the ball toward the
+/// goal): it stands less than 0.15 m behind the ball on that line and less
+/// than 0.45 m to its side. Then: 0.5 m beside the ball, on the player's
+/// side, `wide_behind` behind it. `None` when the ball is not in the way.
+fn round_the_ball(
+    p: &ScriptedParams,
+    pos: [f32; 2],
+    ball: [f32; 2],
+    u: [f32; 2],
+) -> Option<[f32; 2]> {
+    let rel = sub(pos, ball);
+    let along = dot(rel, u);
+    let across = cross(u, rel);
+    if along > -0.15 && across.abs() < 0.45 {
+        let side = if across >= 0.0 { 1.0 } else { -1.0 };
+        let perp = [-u[1] * side, u[0] * side];
+        Some(add(ball, add(scale(perp, 0.5), scale(u, -p.wide_behind))))
+    } else {
+        None
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use naosoccer_proto::Tick;
     use naosoccer_proto::{BallObs, Team};
+
+    /// The wide point of a walk round the ball: on the edge of the region
+    /// where the ball is in the way by default (0.15 m behind the ball), so a
+    /// player that sways 1 cm on its way to the line-up point is back in
+    /// the region and heads for the wide point again; with `wide_behind =
+    /// 0.3` the whole way from the wide point to the line-up point keeps
+    /// 0.15 m clear of the region.
+    #[test]
+    fn the_wide_point_lies_on_the_regions_edge_by_default_and_clear_of_it_at_0_3() {
+        let ball = [2.4, -1.7];
+        let to_goal = sub([3.0, 0.0], ball);
+        let u = scale(to_goal, 1.0 / norm(to_goal));
+        // A robot as one of the scripted team stood for seconds in a
+        // recorded match: 0.03 m behind the ball, 0.43 m to its side.
+        let pos = [1.98, -1.58];
+        // The smallest distance (m) behind the region's edge (0.15 m behind
+        // the ball) along the way from the wide point to the line-up point.
+        let clearance = |wide_behind: f32| {
+            let p = ScriptedParams {
+                wide_behind,
+                ..ScriptedParams::default()
+            };
+            let wide = round_the_ball(&p, pos, ball, u).expect("the ball is in the way");
+            let behind = sub(ball, scale(u, p.behind));
+            assert!(round_the_ball(&p, behind, ball, u).is_none());
+            (0..=100)
+                .map(|k| {
+                    let t = k as f32 / 100.0;
+                    let at = add(wide, scale(sub(behind, wide), t));
+                    -dot(sub(at, ball), u) - 0.15
+                })
+                .fold(f32::INFINITY, f32::min)
+        };
+        let default = clearance(ScriptedParams::default().wide_behind);
+        assert!(default.abs() < 1e-5, "{default}");
+        let fixed = clearance(0.3);
+        assert!(fixed > 0.149, "{fixed}");
+        // The wide point is 0.5 m beside the ball on the robot's side.
+        let p = ScriptedParams::default();
+        let wide = round_the_ball(&p, pos, ball, u).unwrap();
+        assert!((cross(u, sub(wide, ball)) - 0.5).abs() < 1e-5);
+        assert!(round_the_ball(&p, [1.5, -1.7], ball, u).is_none());
+    }
 
     fn obs(player: u8, me: RobotObs, ball: [f32; 2]) -> Observation {
         let mut own = [RobotObs {

@@ -39,6 +39,14 @@ pub struct ScriptedParams {
     pub align_tolerance: f32,
     /// How far behind the ball the player lines up (m).
     pub behind: f32,
+    /// Walking round the ball when it is in the way (the player stands
+    /// less than 0.15 m behind the ball on its line to the goal and less
+    /// than 0.45 m to the side of it), the player first heads for a point
+    /// 0.5 m beside the ball and this far behind it (m). 0.15, the
+    /// default, puts that point on the edge of the region, where a player
+    /// can sway across the edge turning left and right for ever; 0.3 (as
+    /// `behind`) puts it outside, as the learned teams' `approach` does.
+    pub wide_behind: f32,
     /// Passes go to teammates at most this far (m)...
     pub pass_range: f32,
     /// ...within this angle of the heading (rad).
@@ -180,6 +188,7 @@ impl Default for ScriptedParams {
             reach_half_width: 0.08,
             align_tolerance: 0.5,
             behind: 0.3,
+            wide_behind: 0.15,
             pass_range: 2.5,
             pass_cone: 0.35,
             keeper_zone: 1.6,
@@ -350,6 +359,7 @@ impl ScriptedParams {
             ("reach_min", self.reach_min),
             ("align_tolerance", self.align_tolerance),
             ("behind", self.behind),
+            ("wide_behind", self.wide_behind),
             ("keeper_zone", self.keeper_zone),
             ("contest_radius", self.contest_radius),
             ("turn_stop", self.turn_stop),
