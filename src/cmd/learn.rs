@@ -213,13 +213,15 @@ pub struct TrainArgs {
     /// PPO: entropy-bonus weight at the start of the run.
     #[arg(long, hide = true)]
     entropy_coef: Option<f64>,
-    /// PPO: per-tick discount.
+    /// Per-tick discount (PPO and DQN; DQN's transitions are discounted by
+    /// gamma^ticks).
     #[arg(long, hide = true)]
     gamma: Option<f64>,
     /// PPO team preset: the KL early stop's target (0: no early stop).
     #[arg(long, hide = true)]
     target_kl: Option<f64>,
-    /// PPO: the learning rate of actor and critic at the start.
+    /// PPO: the learning rate of actor and critic at the start; DQN: its
+    /// learning rate.
     #[arg(long, hide = true)]
     lr: Option<f64>,
     /// Drill episodes instead of matches: the learners alone before the
@@ -386,14 +388,23 @@ pub(crate) fn run_train(
         cfg.ppo.entropy_coef = e;
     }
     if let Some(g) = a.gamma {
-        cfg.ppo.gamma = g;
+        anyhow::ensure!(g > 0.0 && g <= 1.0, "--gamma must be in (0, 1], not {g}");
+        match algo {
+            Algo::Ppo => cfg.ppo.gamma = g,
+            Algo::Dqn => cfg.dqn.gamma = g,
+        }
     }
     if let Some(k) = a.target_kl {
         cfg.ppo.target_kl = (k > 0.0).then_some(k);
     }
     if let Some(lr) = a.lr {
-        cfg.ppo.lr_actor = lr;
-        cfg.ppo.lr_critic = lr;
+        match algo {
+            Algo::Ppo => {
+                cfg.ppo.lr_actor = lr;
+                cfg.ppo.lr_critic = lr;
+            }
+            Algo::Dqn => cfg.dqn.lr = lr,
+        }
     }
     cfg.ppo.central_critic |= a.central_critic;
     let decision = match cfg.algo {

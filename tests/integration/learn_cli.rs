@@ -260,6 +260,39 @@ fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
     }
 }
 
+/// `--gamma` and `--lr` set DQN's discount and learning rate as they set
+/// PPO's (before, a DQN run ignored them), and land in config.json; a
+/// discount outside (0, 1] is refused.
+#[cfg(feature = "train")]
+#[test]
+fn gamma_and_lr_reach_a_dqn_run() {
+    for (algo, preset) in [("dqn", "team"), ("ppo", "team")] {
+        let run = dir(&format!("cli_gamma_{algo}"));
+        let mut args = short_train(algo, preset, "2");
+        args.extend(["--gamma", "0.98", "--lr", "0.0005"]);
+        let run_s = run.to_str().unwrap().to_string();
+        let mut full: Vec<&str> = args.clone();
+        full.extend(["--out", &run_s]);
+        let out = naosoccer(&full);
+        assert!(
+            out.status.success(),
+            "{algo}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let cfg: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap())
+                .unwrap();
+        let section = &cfg[algo];
+        assert_eq!(section["gamma"].as_f64(), Some(0.98), "{algo}: {section}");
+        let lr = if algo == "dqn" { "lr" } else { "lr_actor" };
+        assert_eq!(section[lr].as_f64(), Some(0.0005), "{algo}: {section}");
+    }
+    let out = naosoccer(&["train", "--algo", "dqn", "--gamma", "1.5", "--out", "x"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--gamma must be in (0, 1]"), "{err}");
+}
+
 /// A shipped team's directory under assets/policies/.
 #[cfg(feature = "train")]
 fn shipped_policy(name: &str) -> String {
