@@ -127,7 +127,8 @@ const PPO_TEAM_PINS: Pins = &[
 
 /// The first DQN team recipe (five actions, the teams now shipped as
 /// `dqn-team-v1-seed*`), test-sized (see the module's comment). Today's
-/// recipe adds the PPO recipe's actions, which this run does not pin.
+/// recipe adds the PPO recipe's actions and a longer gamma (0.998, with
+/// assets/train-dqn-team-long.toml), which this run does not pin.
 const DQN_TEAM: &[&str] = &[
     "train",
     "--algo",
