@@ -268,14 +268,18 @@ impl Dqn {
             let net = QNet::with_input(input, &cfg.hidden, actions, &format!("q{i}"));
             let mut target = QNet::with_input(input, &cfg.hidden, actions, &format!("q{i}"));
             target.vs.copy(&net.vs)?;
-            if cfg.average > 0.0 {
+            opts.push(nn::Adam::default().build(&net.vs, cfg.lr)?);
+            nets.push(net);
+            targets.push(target);
+        }
+        // After every learning network is made, so that the averages'
+        // initial draws (overwritten at once) take nothing from theirs.
+        if cfg.average > 0.0 {
+            for (i, net) in nets.iter().enumerate() {
                 let mut avg = QNet::with_input(input, &cfg.hidden, actions, &format!("q{i}"));
                 avg.vs.copy(&net.vs)?;
                 averages.push(avg);
             }
-            opts.push(nn::Adam::default().build(&net.vs, cfg.lr)?);
-            nets.push(net);
-            targets.push(target);
         }
         Ok(Dqn {
             replays: (0..n).map(|_| Replay::new(cfg.replay, actions)).collect(),

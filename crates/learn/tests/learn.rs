@@ -1959,29 +1959,37 @@ fn the_environment_is_the_same_on_any_number_of_threads() {
 fn a_dqn_weight_average_is_saved_beside_an_unchanged_learning_network() {
     let _torch = torch_lock();
     tch::set_num_threads(1);
-    let mut cfg = tiny_config(Algo::Dqn, 5);
-    cfg.dqn = naosoccer_learn::config::DqnConfig::team();
-    cfg.steps = 4_000;
-    cfg.dqn.warmup = 500;
-    cfg.dqn.epsilon_decay = 2_000;
-    cfg.dqn.target_every = 200;
-    let plain = out_dir("dqn_average_plain");
-    train(&cfg, &plain, &mut |_| {}).unwrap();
-    assert!(!plain.join("final-online.safetensors").exists());
-    cfg.dqn.average = 0.99;
-    let averaged = out_dir("dqn_average_kept");
-    train(&cfg, &averaged, &mut |_| {}).unwrap();
-    let read = |p: PathBuf| std::fs::read(p).unwrap();
-    let learned = read(plain.join("final.safetensors"));
-    assert_eq!(
-        read(averaged.join("final-online.safetensors")),
-        learned,
-        "the learning network differs with an average kept"
-    );
-    let team = read(averaged.join("final.safetensors"));
-    assert_eq!(team.len(), learned.len(), "the same variables");
-    assert_ne!(team, learned, "the saved team is not the average");
-    // The average plays as a team: the same loader reads it.
-    let r = learned_return(&cfg, &averaged);
-    assert!(r.is_finite());
+    // The team preset (one shared network) and the paper's (one network a
+    // learning robot, here two).
+    for (preset, learners) in [("team", vec![1]), ("paper", vec![1, 2])] {
+        let mut cfg = tiny_config(Algo::Dqn, 5);
+        cfg.learners = learners;
+        if preset == "team" {
+            cfg.dqn = naosoccer_learn::config::DqnConfig::team();
+            cfg.dqn.epsilon_decay = 2_000;
+        }
+        cfg.steps = 4_000;
+        cfg.dqn.warmup = 500;
+        cfg.dqn.target_every = 200;
+        let plain = out_dir(&format!("dqn_average_plain_{preset}"));
+        train(&cfg, &plain, &mut |_| {}).unwrap();
+        assert!(!plain.join("final-online.safetensors").exists());
+        cfg.dqn.average = 0.99;
+        let averaged = out_dir(&format!("dqn_average_kept_{preset}"));
+        train(&cfg, &averaged, &mut |_| {}).unwrap();
+        let read = |p: PathBuf| std::fs::read(p).unwrap();
+        let learned = read(plain.join("final.safetensors"));
+        assert_eq!(
+            read(averaged.join("final-online.safetensors")),
+            learned,
+            "{preset}: the learning network differs with an average kept"
+        );
+        let team = read(averaged.join("final.safetensors"));
+        assert_eq!(team.len(), learned.len(), "{preset}: the same variables");
+        assert_ne!(team, learned, "{preset}: the saved team is not the average");
+        if preset == "team" {
+            // The average plays as a team: the same loader reads it.
+            assert!(learned_return(&cfg, &averaged).is_finite());
+        }
+    }
 }
