@@ -142,10 +142,10 @@ pub async fn join_robot(
 }
 
 /// A server whose 600-tick matches wait a long while for their clients'
-/// actions (each tick waits for blue), with one match an admin created
-/// (the other slots `idle`) and blue's four players joined to it: the
-/// server, the admin and blue connections, and the match's id.
-pub async fn blue_waits_in_an_idle_match() -> (TestServer, Client, Client, MatchId) {
+/// actions (each tick waits for blue), with one match an admin created,
+/// which starts once `start_players` players joined (the other slots
+/// `idle`): the server, the admin connection and the match's id.
+pub async fn idle_match_waiting_for(start_players: u8) -> (TestServer, Client, MatchId) {
     let mut cfg = config(600);
     cfg.deadline_ms = 600_000; // each tick waits for blue
     let server = start(cfg).await;
@@ -154,12 +154,18 @@ pub async fn blue_waits_in_an_idle_match() -> (TestServer, Client, Client, Match
         .create_match(CreateMatch {
             token: ADMIN.into(),
             fill: Some(Fill::Idle),
-            start_players: Some(4),
+            start_players: Some(start_players),
             ..CreateMatch::default()
         })
         .await
         .unwrap();
-    let id = info.match_id;
+    (server, admin, info.match_id)
+}
+
+/// [`idle_match_waiting_for`] four players, with blue's four joined to
+/// it: the server, the admin and blue connections, and the match's id.
+pub async fn blue_waits_in_an_idle_match() -> (TestServer, Client, Client, MatchId) {
+    let (server, admin, id) = idle_match_waiting_for(4).await;
     let team: Vec<Player> = Player::all().collect();
     let mut blue = Client::connect(server.addr(), "blue").await.unwrap();
     blue.join(Some(id), naosoccer_proto::Team::Blue, BLUE, &team)

@@ -16,6 +16,20 @@ fn dir(name: &str) -> PathBuf {
     d
 }
 
+/// Runs `train` with `args` (which write the run to `run`), asserts that it
+/// succeeded (`what` names it in the failure) and returns the run's
+/// config.json.
+#[cfg(feature = "train")]
+fn train_config(args: &[&str], run: &std::path::Path, what: &str) -> serde_json::Value {
+    let out = naosoccer(args);
+    assert!(
+        out.status.success(),
+        "{what}: train failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap()
+}
+
 #[cfg(feature = "train")]
 #[test]
 fn train_eval_plot_round_trip() {
@@ -273,15 +287,7 @@ fn gamma_and_lr_reach_a_dqn_run() {
         let run_s = run.to_str().unwrap().to_string();
         let mut full: Vec<&str> = args.clone();
         full.extend(["--out", &run_s]);
-        let out = naosoccer(&full);
-        assert!(
-            out.status.success(),
-            "{algo}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let cfg: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap())
-                .unwrap();
+        let cfg = train_config(&full, &run, algo);
         let section = &cfg[algo];
         assert_eq!(section["gamma"].as_f64(), Some(0.98), "{algo}: {section}");
         let lr = if algo == "dqn" { "lr" } else { "lr_actor" };
@@ -362,14 +368,7 @@ fn support_action_runs_start_from_a_shipped_team_and_play() {
         "--out",
         run_s,
     ]);
-    let out = naosoccer(&a);
-    assert!(
-        out.status.success(),
-        "train failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let config: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap();
+    let config = train_config(&a, &run, "ppo");
     assert_eq!(config["ppo"]["decision"]["pass"], true);
     assert_eq!(config["ppo"]["decision"]["support"], true);
     assert_eq!(config["ppo"]["decision"]["support_hold"], 40);
@@ -483,14 +482,7 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
     };
     let mut a = args("ppo", "team");
     a.extend(["--init-from", &shipped, "--out", run_s]);
-    let out = naosoccer(&a);
-    assert!(
-        out.status.success(),
-        "train failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let config: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap();
+    let config = train_config(&a, &run, "ppo");
     assert_eq!(config["ppo"]["decision"]["pass"], true);
     assert_eq!(config["init_from"], serde_json::json!(shipped));
     plays_a_match(&format!("ppo:{run_s}"));
@@ -501,14 +493,7 @@ fn pass_action_runs_start_from_a_shipped_team_and_play() {
     let dqn_s = dqn.to_str().unwrap();
     let mut a = args("dqn", "team");
     a.extend(["--support-action", "--defend-action", "--out", dqn_s]);
-    let out = naosoccer(&a);
-    assert!(
-        out.status.success(),
-        "dqn train failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let config: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dqn.join("config.json")).unwrap()).unwrap();
+    let config = train_config(&a, &dqn, "dqn");
     let decision = &config["dqn"]["decision"];
     for flag in ["pass", "support", "defend"] {
         assert_eq!(decision[flag], true, "{flag}: {decision}");

@@ -319,23 +319,11 @@ async fn set_state_moves_the_ball_and_a_robot() {
 /// event too (an event of a kind it does not know, which it skips).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn set_state_before_the_start_is_the_first_observation() {
-    let mut cfg = config(600);
-    cfg.deadline_ms = 600_000;
-    let server = start(cfg).await;
-    let mut admin = Client::connect(server.addr(), "admin").await.unwrap();
-    let info = admin
-        .create_match(CreateMatch {
-            token: ADMIN.into(),
-            fill: Some(Fill::Idle),
-            start_players: Some(1),
-            ..CreateMatch::default()
-        })
-        .await
-        .unwrap();
+    let (server, mut admin, match_id) = idle_match_waiting_for(1).await;
     let set = admin
         .set_state(SetState {
             token: ADMIN.into(),
-            match_id: info.match_id,
+            match_id,
             ball: Some(BallPlacement {
                 x: -2.0,
                 y: 1.25,
@@ -361,9 +349,7 @@ async fn set_state_before_the_start_is_the_first_observation() {
     let stream = tokio::net::TcpStream::connect(server.addr()).await.unwrap();
     let mut c = Client::handshake(stream, &old).await.unwrap();
     let me = [Player::new(2).unwrap()];
-    c.join(Some(info.match_id), Team::Blue, BLUE, &me)
-        .await
-        .unwrap();
+    c.join(Some(match_id), Team::Blue, BLUE, &me).await.unwrap();
     let o = next_observation(&mut c).await;
     assert_eq!(o.tick, Tick::ZERO);
     let seen = &o.observations[0];
