@@ -96,7 +96,10 @@ pub fn train(
     // decision that followed) is open.
     let mut link: Vec<Option<usize>> = vec![None; rows];
     let (mut dec_act, mut dec_logp, mut dec_val) = (Vec::new(), Vec::new(), Vec::new());
-    let mut acts = Vec::new();
+    let (mut acts, mut asked_rows) = (Vec::new(), Vec::new());
+    // Transitions closed by a decision, waiting for its value: (the
+    // transition, the decision's index this tick).
+    let mut waiting: Vec<(usize, usize)> = Vec::new();
     let (mut cut_rows, mut cut_cobs, mut cut_val) = (Vec::new(), Vec::new(), Vec::new());
     let (mut boot, mut now_cobs, mut now_val) = (vec![0.0f32; rows], Vec::new(), vec![0.0; rows]);
     while !run.done() {
@@ -116,21 +119,32 @@ pub fn train(
             dec_val.resize(k, 0.0);
             let (obs, ok, banned) = (&asked.obs, &asked.shoot_ok, &asked.banned);
             ppo.act_masked(obs, ok, banned, &mut rng, &mut dec_act, &mut dec_logp);
-            ppo.critic_values(&asked.critic_obs, &mut dec_val);
+            asked_rows.clone_from(&asked.rows);
+            // The critic's values of the decisions are filled in below,
+            // computed while the matches step: the tick needs only the
+            // actions.
             acts.clear();
-            acts.extend(
-                dec_logp
-                    .iter()
-                    .zip(&dec_val)
-                    .map(|(&logp, &value)| Act { logp, value }),
-            );
+            acts.extend(dec_logp.iter().map(|&logp| Act { logp, value: 0.0 }));
+            waiting.clear();
             dec.decide(&env, &dec_act, &acts, &mut |c| {
                 let End::Decided { next, .. } = c.end else {
                     unreachable!("a decision closes here only by the next one")
                 };
-                tr.push(&c, dec_val[next], false, &mut link);
+                waiting.push((tr.len(), next));
+                tr.push(&c, 0.0, false, &mut link);
             });
-            let finished = env.step(dec.actions())?;
+            let critic_obs = &dec.asked().critic_obs;
+            let finished = env.step_beside(dec.actions(), || {
+                ppo.critic_values(critic_obs, &mut dec_val);
+            })?;
+            for &(i, next) in &waiting {
+                tr.next_values[i] = dec_val[next];
+            }
+            for (&r, &value) in asked_rows.iter().zip(&dec_val) {
+                if let Some(p) = dec.payload_mut(r) {
+                    p.value = value;
+                }
+            }
             // Episodes cut short (scenarios) are bootstrapped with the
             // critic's value of the state where they were cut.
             dec.cut_critic_rows(&env, &mut cut_rows, &mut cut_cobs);

@@ -52,20 +52,34 @@ impl Stepper {
     pub fn for_each<T: Send>(&self, items: &mut [T], step: impl Fn(&mut T) + Sync) {
         match &self.pool {
             None => items.iter_mut().for_each(step),
-            Some(pool) => self.share(pool, items.iter_mut(), step),
+            Some(pool) => self.share(pool, items.iter_mut(), step, || {}),
         }
     }
 
     /// `step` of every work item (each typically a match and its share of
     /// the batch's output buffers), its results in the items' order.
     pub fn map<W: Send, R: Send>(&self, work: Vec<W>, step: impl Fn(W) -> R + Sync) -> Vec<R> {
+        self.map_beside(work, step, || {})
+    }
+
+    /// [`Stepper::map`], the caller's thread running `beside` first while
+    /// the workers start on the items (the caller's own work that the
+    /// items do not wait for), then taking its share of them.
+    pub fn map_beside<W: Send, R: Send>(
+        &self,
+        work: Vec<W>,
+        step: impl Fn(W) -> R + Sync,
+        beside: impl FnOnce(),
+    ) -> Vec<R> {
         match &self.pool {
-            None => work.into_iter().map(step).collect(),
+            None => {
+                beside();
+                work.into_iter().map(step).collect()
+            }
             Some(pool) => {
                 let mut out: Vec<Option<R>> = work.iter().map(|_| None).collect();
-                self.share(pool, work.into_iter().zip(out.iter_mut()), |(w, r)| {
-                    *r = Some(step(w))
-                });
+                let items = work.into_iter().zip(out.iter_mut());
+                self.share(pool, items, |(w, r)| *r = Some(step(w)), beside);
                 out.into_iter()
                     .map(|r| r.expect("every item was stepped"))
                     .collect()
@@ -79,8 +93,13 @@ impl Stepper {
     /// thread from tick to tick, and on a busy one a worker the machine
     /// does not run in time leaves its share to the others instead of
     /// holding up the tick.
-    fn share<I>(&self, pool: &rayon::ThreadPool, items: I, step: impl Fn(I::Item) + Sync)
-    where
+    fn share<I>(
+        &self,
+        pool: &rayon::ThreadPool,
+        items: I,
+        step: impl Fn(I::Item) + Sync,
+        beside: impl FnOnce(),
+    ) where
         I: DoubleEndedIterator + Send,
     {
         let items = Mutex::new(items);
@@ -102,6 +121,7 @@ impl Stepper {
             for _ in 1..self.threads {
                 s.spawn(|_| take(false));
             }
+            beside();
             take(true);
         });
     }
@@ -184,6 +204,28 @@ mod tests {
             assert_eq!(items, [100; 5], "threads {threads}");
             let squares = stepper.map((0..7u64).collect(), |x| x * x);
             assert_eq!(squares, [0, 1, 4, 9, 16, 25, 36], "threads {threads}");
+        }
+    }
+
+    /// `map_beside` runs its caller's work once, on the caller's thread,
+    /// and steps every item as `map` does.
+    #[test]
+    fn the_callers_work_beside_the_items() {
+        for threads in [1, 2, 3] {
+            let stepper = Stepper::new(threads).unwrap();
+            let caller = std::thread::current().id();
+            let mut ran = Vec::new();
+            let squares = stepper.map_beside(
+                (0..9u64).collect(),
+                |x| x * x,
+                || ran.push(std::thread::current().id()),
+            );
+            assert_eq!(
+                squares,
+                [0, 1, 4, 9, 16, 25, 36, 49, 64],
+                "threads {threads}"
+            );
+            assert_eq!(ran, [caller], "threads {threads}");
         }
     }
 

@@ -236,6 +236,13 @@ impl<P: Copy> Decisions<P> {
         &self.actions
     }
 
+    /// What the learner keeps of robot `row`'s open decision, to complete
+    /// it after [`Decisions::decide`] (e.g. with a value computed while
+    /// the matches stepped); `None` without one.
+    pub fn payload_mut(&mut self, row: usize) -> Option<&mut P> {
+        self.open[row].as_mut().map(|d| &mut d.payload)
+    }
+
     /// After [`VecEnv::step`]: the tick's rewards go into the open
     /// decisions; those of episodes that ended close (to `emit`, in row
     /// order) and their robots' holds start afresh. Without decision

@@ -315,6 +315,18 @@ impl VecEnv {
     /// finished matches restart with their next episode's seed. Returns the
     /// episodes that ended.
     pub fn step(&mut self, actions: &[usize]) -> Result<Vec<Episode>, LearnError> {
+        self.step_beside(actions, || {})
+    }
+
+    /// [`VecEnv::step`], the caller's thread running `beside` first while
+    /// the other threads start stepping (work of the caller's that the
+    /// tick does not wait for, such as the critic's values of the
+    /// decisions just taken); then it steps its share of the matches.
+    pub fn step_beside(
+        &mut self,
+        actions: &[usize],
+        beside: impl FnOnce(),
+    ) -> Result<Vec<Episode>, LearnError> {
         let l = self.env.learners.len();
         assert_eq!(actions.len(), self.rows(), "one action per learning robot");
         let mut teams: Vec<(u64, &[Observation])> = Vec::new();
@@ -368,11 +380,13 @@ impl VecEnv {
                     .zip(self.final_feats.chunks_mut(l * OBS_DIM)),
             )
             .collect();
-        let results = self
-            .stepper
-            .map(work, |((((((slot, a), opp), f), r), d), cut)| {
+        let results = self.stepper.map_beside(
+            work,
+            |((((((slot, a), opp), f), r), d), cut)| {
                 step_match(cfg, env, scale, mix, slot, a, opp, f, r, d, cut)
-            });
+            },
+            beside,
+        );
         for r in results {
             r?;
         }
