@@ -62,14 +62,15 @@ pub struct TrainArgs {
     /// written as fields) into --out with --seed; each stage gets its own
     /// directory, `--resume DIR` continues the chain where it stopped, and
     /// DIR/time.json holds the wall-clock time of the whole chain. The
-    /// finished team is `ppo:DIR`. Other options belong in the recipe.
+    /// finished team is `ppo:DIR`. Other options belong in the recipe
+    /// (but --threads).
     #[arg(long, value_name = "FILE", conflicts_with_all = [
         "algo", "steps", "resume", "preset", "persist", "no_shoot_mask", "pass_action",
         "support_action", "support_hold", "support_roles", "support_only", "support_spot",
         "approach_action", "approach_only", "defend_action", "own_goal_guard", "init_from", "pass_init", "support_init_bias",
         "central_critic", "minibatches", "entropy_coef", "gamma", "target_kl", "lr", "drill",
         "scenarios", "scenario_matches", "obs_version", "opponent",
-        "matches", "threads", "torch_threads", "config", "minutes", "learners", "teammates",
+        "matches", "torch_threads", "config", "minutes", "learners", "teammates",
         "checkpoint_every", "rollout", "epochs", "shared", "n_step", "epsilon", "average"])]
     recipe: Option<PathBuf>,
     /// Algorithm: dqn (the paper's Algorithm 1) or ppo (Algorithm 2).
@@ -265,9 +266,11 @@ pub struct TrainArgs {
     /// Matches played side by side.
     #[arg(long, default_value_t = 16)]
     matches: usize,
-    /// Threads stepping matches.
-    #[arg(long, default_value_t = 2)]
-    threads: usize,
+    /// Threads stepping matches [default: 2]. With --recipe or --resume:
+    /// this sitting's, for every stage (also a recipe's own `threads`); the
+    /// thread count changes nothing simulated or learned, only the speed.
+    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
+    threads: Option<usize>,
     /// libtorch's intra-op threads.
     #[arg(long, hide = true, default_value_t = 1)]
     torch_threads: i32,
@@ -316,7 +319,7 @@ pub struct TrainArgs {
 pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
     if let Some(recipe) = &a.recipe {
         let out = a.out.as_ref().context("--recipe needs --out DIR")?;
-        return super::recipe::start(recipe, out, a.seed);
+        return super::recipe::start(recipe, out, a.seed, a.threads);
     }
     if let Some(dir) = a
         .resume
@@ -328,7 +331,7 @@ pub fn train_cmd(a: TrainArgs) -> anyhow::Result<()> {
             "{} is a recipe run: its stages' lengths are in its recipe.toml, not --steps",
             dir.display()
         );
-        return super::recipe::run(dir);
+        return super::recipe::run(dir, a.threads);
     }
     run_train(a, None, &mut || {})
 }
@@ -348,7 +351,9 @@ pub(crate) fn run_train(
     cfg.steps = a.steps.unwrap_or(1_000_000);
     cfg.seed = a.seed;
     cfg.matches = a.matches;
-    cfg.threads = a.threads;
+    if let Some(t) = a.threads {
+        cfg.threads = t;
+    }
     cfg.learners = parse_players(&a.learners).map_err(anyhow::Error::msg)?;
     cfg.teammates = a
         .teammates
@@ -551,7 +556,7 @@ pub(crate) fn run_train(
         );
     };
     let summary = match (&a.resume, &a.out) {
-        (Some(dir), _) => naosoccer_learn::train::resume(dir, a.steps, &mut show)?,
+        (Some(dir), _) => naosoccer_learn::train::resume(dir, a.steps, a.threads, &mut show)?,
         (None, Some(out)) => train(&cfg, out, &mut show)?,
         (None, None) => anyhow::bail!("--out DIR is needed (or --resume DIR)"),
     };

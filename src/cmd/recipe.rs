@@ -234,6 +234,11 @@ struct Times {
     sittings: u32,
     /// Logical CPUs of the machine of the last sitting.
     cpus: usize,
+    /// Each sitting's CPU model, in order: libtorch's kernels round by
+    /// CPU, so a run resumed on another kind of machine goes on
+    /// differently from one that was not stopped.
+    #[serde(default)]
+    cpu_models: Vec<String>,
 }
 
 #[derive(Serialize, Deserialize, Default, Clone)]
@@ -258,6 +263,7 @@ impl Times {
             s.name.clone_from(&r.name);
         }
         t.cpus = std::thread::available_parallelism().map_or(1, |n| n.get());
+        t.cpu_models.push(cpu_model());
         Ok(t)
     }
 
@@ -271,8 +277,26 @@ impl Times {
     }
 }
 
+/// The CPU's model name (Linux: /proc/cpuinfo), else its architecture.
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|text| {
+            text.lines()
+                .find_map(|l| l.strip_prefix("model name")?.split_once(':'))
+                .map(|(_, m)| m.trim().to_string())
+        })
+        .filter(|m| !m.is_empty())
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string())
+}
+
 /// `train --recipe FILE --out DIR --seed N`: a new recipe run.
-pub fn start(recipe_path: &Path, out: &Path, seed: u64) -> anyhow::Result<()> {
+pub fn start(
+    recipe_path: &Path,
+    out: &Path,
+    seed: u64,
+    threads: Option<usize>,
+) -> anyhow::Result<()> {
     let text = std::fs::read_to_string(recipe_path)
         .with_context(|| format!("reading recipe {}", recipe_path.display()))?;
     Recipe::parse(&text, &recipe_path.display().to_string())?;
@@ -290,7 +314,7 @@ pub fn start(recipe_path: &Path, out: &Path, seed: u64) -> anyhow::Result<()> {
     )?;
     // Written last: its presence marks a recipe run.
     std::fs::write(out.join("recipe.toml"), &text)?;
-    run(out)
+    run(out, threads)
 }
 
 /// Whether `dir` is a recipe run (`train --resume` continues it).
@@ -301,7 +325,9 @@ pub fn is_recipe_run(dir: &Path) -> bool {
 /// Runs (or continues) every stage of the recipe run in `dir`: finished
 /// stages are skipped, a stopped one continues from its latest checkpoint
 /// (PPO team preset; other stages start over), the rest start afresh.
-pub fn run(dir: &Path) -> anyhow::Result<()> {
+/// `threads`, if given, steps every stage's matches this sitting in place
+/// of the recipe's `threads` (which changes nothing the stages learn).
+pub fn run(dir: &Path, threads: Option<usize>) -> anyhow::Result<()> {
     let recipe_path = dir.join("recipe.toml");
     let text = std::fs::read_to_string(&recipe_path)
         .with_context(|| format!("reading {}", recipe_path.display()))?;
@@ -342,6 +368,7 @@ pub fn run(dir: &Path) -> anyhow::Result<()> {
             eprintln!("stage {}/{n} {name}: starting", i + 1);
             recipe.stage_argv(i, dir, info.seed)
         };
+        let argv = with_threads(argv, threads);
         let cmd = StageCommand::try_parse_from(&argv)
             .map_err(|e| anyhow::anyhow!("stage {}: {}", i + 1, e.render()))?;
         let base = times.stages[i].seconds;
@@ -385,6 +412,17 @@ pub fn run(dir: &Path) -> anyhow::Result<()> {
         dir.display()
     );
     Ok(())
+}
+
+/// `argv` with its `--threads` replaced by `threads`, if given.
+fn with_threads(mut argv: Vec<String>, threads: Option<usize>) -> Vec<String> {
+    if let Some(t) = threads {
+        if let Some(at) = argv.iter().position(|a| a == "--threads") {
+            argv.drain(at..(at + 2).min(argv.len()));
+        }
+        argv.extend(["--threads".into(), t.to_string()]);
+    }
+    argv
 }
 
 /// Whether the stage run in `dir` is one `train --resume` continues: its

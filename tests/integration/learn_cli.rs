@@ -724,8 +724,9 @@ fn the_default_build_links_no_libtorch() {
 /// (the second from the first's weights) and the team lands in the run
 /// directory with its time file; a run stopped between the stages and
 /// continued with `--resume` skips the finished stage and writes the same
-/// final weights; a second start on the same directory is refused, and a
-/// bad recipe is refused before anything is trained.
+/// final weights, and so does one continued with another `--threads`; a
+/// second start on the same directory is refused, and a bad recipe is
+/// refused before anything is trained.
 #[cfg(feature = "train")]
 #[test]
 fn a_recipe_runs_every_stage_and_resumes_between_them() {
@@ -772,6 +773,8 @@ scenario-matches = 2
         whole.to_str().unwrap(),
         "--seed",
         "5",
+        "--threads",
+        "1",
     ]);
     assert!(out.status.success(), "{}", common::text(&out));
     for f in [
@@ -789,6 +792,7 @@ scenario-matches = 2
     assert!(second_cfg.contains("01-first"), "{second_cfg}");
     // The recipe's list of scenarios: the run keeps each file's name and text.
     let second: serde_json::Value = serde_json::from_str(&second_cfg).unwrap();
+    assert_eq!(second["threads"], 1, "--threads reaches every stage");
     let scenarios = &second["scenarios"];
     assert_eq!(scenarios["matches"], 2, "{second_cfg}");
     assert_eq!(scenarios["scenarios"][0]["name"], "pass-0");
@@ -800,6 +804,7 @@ scenario-matches = 2
     let time: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(whole.join("time.json")).unwrap()).unwrap();
     assert_eq!(time["sittings"], 1);
+    assert_eq!(time["cpu_models"].as_array().unwrap().len(), 1, "{time}");
     assert_eq!(time["stages"].as_array().unwrap().len(), 2);
     assert!(time["total_seconds"].as_f64().unwrap() > 0.0, "{time}");
     let final_whole = std::fs::read(whole.join("final.safetensors")).unwrap();
@@ -873,12 +878,25 @@ scenario-matches = 2
         &mid.join("02-second/checkpoints"),
         &|n| n.starts_with(&first),
     );
-    let out = naosoccer(&["train", "--resume", mid.to_str().unwrap()]);
+    // On three threads this time: the count changes nothing learned.
+    let out = naosoccer(&["train", "--resume", mid.to_str().unwrap(), "--threads", "3"]);
     assert!(out.status.success(), "{}", common::text(&out));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("stage 2/2 second: continuing from its latest checkpoint"),
         "{err}"
+    );
+    let mid_cfg: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(mid.join("02-second/config.json")).unwrap())
+            .unwrap();
+    assert_eq!(mid_cfg["threads"], 3, "the continued stage's thread count");
+    let mid_time: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(mid.join("time.json")).unwrap()).unwrap();
+    assert_eq!(mid_time["sittings"], 2, "{mid_time}");
+    assert_eq!(
+        mid_time["cpu_models"].as_array().unwrap().len(),
+        2,
+        "{mid_time}"
     );
     assert_eq!(
         std::fs::read(mid.join("final.safetensors")).unwrap(),
@@ -923,6 +941,16 @@ scenario-matches = 2
     assert!(!empty.exists(), "nothing written for a bad recipe");
     let out = naosoccer(&["train", "--recipe", recipe_s, "--steps", "5"]);
     assert!(!out.status.success(), "options beside --recipe are refused");
+    let out = naosoccer(&[
+        "train",
+        "--recipe",
+        recipe_s,
+        "--out",
+        "x",
+        "--threads",
+        "0",
+    ]);
+    assert!(!out.status.success(), "no threads at all is refused");
 }
 
 /// `eval` plays one short match of the team `spec` against `scripted`.

@@ -35,13 +35,16 @@ pub fn train(
 
 /// Continues the run in `dir` from its latest resumable checkpoint, as if
 /// it had not stopped (team-preset PPO runs; `steps`, if given, replaces
-/// the run's length). metrics.csv keeps the rows up to that checkpoint.
+/// the run's length, `threads` the threads stepping its matches, which
+/// changes nothing it learns). metrics.csv keeps the rows up to that
+/// checkpoint.
 pub fn resume(
     dir: &Path,
     steps: Option<u64>,
+    threads: Option<usize>,
     progress: &mut dyn FnMut(&Progress<'_>),
 ) -> Result<TrainSummary, LearnError> {
-    let (cfg, state) = resume_point(dir, steps)?;
+    let (cfg, state) = resume_point(dir, steps, threads)?;
     tch::manual_seed(cfg.seed as i64);
     ppo::train(&cfg, dir, Some(state), progress)
 }

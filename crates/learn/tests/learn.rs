@@ -911,7 +911,7 @@ fn resume_matches_an_uninterrupted_run(
         1 + 8,
         "the killed run wrote 8 rows"
     );
-    naosoccer_learn::train::resume(&split, None, &mut |_| {}).unwrap();
+    naosoccer_learn::train::resume(&split, None, None, &mut |_| {}).unwrap();
 
     let a = std::fs::read_to_string(whole.join("metrics.csv")).unwrap();
     let b = std::fs::read_to_string(split.join("metrics.csv")).unwrap();

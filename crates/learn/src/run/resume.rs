@@ -91,12 +91,13 @@ pub(crate) fn read_checkpoint(
     Ok(())
 }
 
-/// The configuration of the run in `dir` (its length replaced by `steps`,
-/// if given, and saved so) and the state of its latest resumable
-/// checkpoint (decision-level PPO runs).
+/// The configuration of the run in `dir` (its length replaced by `steps`
+/// and its thread count by `threads`, if given, and saved so) and the
+/// state of its latest resumable checkpoint (decision-level PPO runs).
 pub(crate) fn resume_point(
     dir: &Path,
     steps: Option<u64>,
+    threads: Option<usize>,
 ) -> Result<(TrainConfig, ResumeState), LearnError> {
     let cfg_path = dir.join("config.json");
     let text = std::fs::read_to_string(&cfg_path).map_err(|e| LearnError::io(&cfg_path, e))?;
@@ -107,8 +108,9 @@ pub(crate) fn resume_point(
             "--resume continues decision-level PPO runs (--preset team) only".into(),
         ));
     }
-    if let Some(s) = steps {
-        cfg.steps = s;
+    if steps.is_some() || threads.is_some() {
+        cfg.steps = steps.unwrap_or(cfg.steps);
+        cfg.threads = threads.unwrap_or(cfg.threads);
         let json =
             serde_json::to_string_pretty(&cfg).map_err(|e| LearnError::json(&cfg_path, e))?;
         std::fs::write(&cfg_path, json).map_err(|e| LearnError::io(&cfg_path, e))?;
