@@ -148,8 +148,19 @@ impl ActorCritic {
 
     /// State values, `[n]`.
     pub fn value(&self, obs: &Tensor) -> Tensor {
-        self.critic.forward(obs).squeeze_dim(-1)
+        value(&self.critic, obs)
     }
+
+    /// The actor and the critic apart, each usable on its own thread (an
+    /// update back-propagates the critic's loss beside the actor's).
+    pub fn parts(&mut self) -> (&mut Mlp, &mut Mlp) {
+        (&mut self.actor, &mut self.critic)
+    }
+}
+
+/// The critic `critic`'s state values of `obs`, `[n]`.
+pub fn value(critic: &Mlp, obs: &Tensor) -> Tensor {
+    critic.forward(obs).squeeze_dim(-1)
 }
 
 /// `n` rows of `width` floats as an `[n, dim]` tensor (the first `dim` of each).

@@ -34,7 +34,7 @@ use crate::adam::Adam;
 use crate::config::{run_scale, PpoConfig, Preset, TrainConfig};
 use crate::env::decisions::{Decisions, End};
 use crate::metrics::Progress;
-use crate::nets::{ActorCritic, RunningNorm};
+use crate::nets::{self, ActorCritic, RunningNorm};
 use crate::obs::ObsScale;
 pub use crate::rollout::{Act, Transitions};
 use crate::run::resume::{read_checkpoint, ResumeState};
@@ -350,6 +350,8 @@ impl Ppo {
         };
         let mut order: Vec<i64> = (0..n as i64).collect();
         let mut count = 0.0;
+        // The critic's thread computes with as many threads as this one.
+        let torch_threads = tch::get_num_threads();
         // The team's optimiser is ours (a checkpoint saves its state); the
         // per-tick presets keep tch's.
         let opt: &mut dyn Optimiser = match self.adam.as_mut() {
@@ -362,9 +364,9 @@ impl Ppo {
             }
             for chunk in order.chunks(mb) {
                 let idx = Tensor::from_slice(chunk);
-                let target = targets.index_select(0, &idx);
-                let logits =
-                    self.net.logits(&obs.index_select(0, &idx)) + mask.index_select(0, &idx);
+                opt.zero_grad();
+                let (actor, critic) = self.net.parts();
+                let logits = actor.forward(&obs.index_select(0, &idx)) + mask.index_select(0, &idx);
                 let logp_all = logits.log_softmax(-1, Kind::Float);
                 let logp = logp_all
                     .gather(1, &actions.index_select(0, &idx).unsqueeze(1), false)
@@ -372,24 +374,52 @@ impl Ppo {
                 let entropy = -(logp_all.exp() * &logp_all)
                     .sum_dim_intlist(-1, false, Kind::Float)
                     .mean(Kind::Float);
-                let v = self.net.value(&cobs.index_select(0, &idx));
-                let a = match &adv {
-                    Some(adv) => {
-                        let a = adv.index_select(0, &idx);
-                        if chunk.len() > 1 {
-                            (&a - a.mean(Kind::Float)) / (a.std(true) + 1e-8)
-                        } else {
-                            a
-                        }
-                    }
-                    None => &target - v.detach(),
-                };
                 let old = logp_old.index_select(0, &idx);
-                let pl = clipped_surrogate_loss(&logp, &old, &a, cfg.clip);
-                let vl = (&v - &target).square().mean(Kind::Float);
-                let loss = &pl + cfg.value_coef * &vl - ent_coef * &entropy;
-                opt.zero_grad();
-                loss.backward();
+                let (pl, vl) = match &adv {
+                    // GAE's advantages do not take the critic: its loss is
+                    // back-propagated on a second thread while this one
+                    // does the actor's. The two share no variable and each
+                    // gets the gradients the sum's backward pass gives it
+                    // (the same operations, so the same bits), in about
+                    // half the time.
+                    Some(adv) => {
+                        let (cobs, targets) = (cobs.shallow_clone(), targets.shallow_clone());
+                        std::thread::scope(|s| {
+                            let critic_loss = s.spawn(move || {
+                                tch::set_num_threads(torch_threads);
+                                let idx = Tensor::from_slice(chunk);
+                                let v = nets::value(critic, &cobs.index_select(0, &idx));
+                                let vl = (&v - targets.index_select(0, &idx))
+                                    .square()
+                                    .mean(Kind::Float);
+                                (cfg.value_coef * &vl).backward();
+                                vl
+                            });
+                            let a = adv.index_select(0, &idx);
+                            let a = if chunk.len() > 1 {
+                                (&a - a.mean(Kind::Float)) / (a.std(true) + 1e-8)
+                            } else {
+                                a
+                            };
+                            let pl = clipped_surrogate_loss(&logp, &old, &a, cfg.clip);
+                            (&pl - ent_coef * &entropy).backward();
+                            let vl = critic_loss
+                                .join()
+                                .unwrap_or_else(|e| std::panic::resume_unwind(e));
+                            (pl, vl)
+                        })
+                    }
+                    // The paper's advantages take the critic's values.
+                    None => {
+                        let target = targets.index_select(0, &idx);
+                        let v = nets::value(critic, &cobs.index_select(0, &idx));
+                        let a = &target - v.detach();
+                        let pl = clipped_surrogate_loss(&logp, &old, &a, cfg.clip);
+                        let vl = (&v - &target).square().mean(Kind::Float);
+                        (&pl + cfg.value_coef * &vl - ent_coef * &entropy).backward();
+                        (pl, vl)
+                    }
+                };
                 if let Some(m) = cfg.max_grad_norm {
                     opt.clip_grad_norm(m);
                 }
