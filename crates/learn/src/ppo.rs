@@ -384,10 +384,11 @@ impl Ppo {
                     // half the time.
                     Some(adv) => {
                         let (cobs, targets) = (cobs.shallow_clone(), targets.shallow_clone());
+                        let critic_idx = idx.shallow_clone();
                         std::thread::scope(|s| {
                             let critic_loss = s.spawn(move || {
                                 tch::set_num_threads(torch_threads);
-                                let idx = Tensor::from_slice(chunk);
+                                let idx = critic_idx;
                                 let v = nets::value(critic, &cobs.index_select(0, &idx));
                                 let vl = (&v - targets.index_select(0, &idx))
                                     .square()
