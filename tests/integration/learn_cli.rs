@@ -328,6 +328,45 @@ fn short_train(algo: &'static str, preset: &'static str, seed: &'static str) -> 
     ]
 }
 
+/// `--entropy-coef-end`: the weight PPO's entropy bonus falls to by the
+/// run's end, recorded in config.json (the team preset's own 0.002 when
+/// not given), and refused when negative.
+#[cfg(feature = "train")]
+#[test]
+fn the_entropy_weight_at_the_end_is_an_option() {
+    let run = dir("cli_entropy_end");
+    let run_s = run.to_str().unwrap();
+    let mut a = short_train("ppo", "team", "5");
+    a.extend([
+        "--entropy-coef",
+        "0.02",
+        "--entropy-coef-end",
+        "0.005",
+        "--out",
+        run_s,
+    ]);
+    let config = train_config(&a, &run, "ppo with --entropy-coef-end");
+    assert_eq!(config["ppo"]["entropy_coef"], 0.02);
+    assert_eq!(config["ppo"]["entropy_coef_end"], 0.005);
+
+    let plain = dir("cli_entropy_end_default");
+    let plain_s = plain.to_str().unwrap();
+    let mut a = short_train("ppo", "team", "5");
+    a.extend(["--out", plain_s]);
+    let config = train_config(&a, &plain, "ppo team");
+    assert_eq!(config["ppo"]["entropy_coef_end"], 0.002);
+
+    let mut a = short_train("ppo", "team", "5");
+    a.extend(["--entropy-coef-end=-0.1", "--out", plain_s]);
+    let out = naosoccer(&a);
+    assert!(!out.status.success(), "a negative weight must be refused");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--entropy-coef-end must be a weight of 0 or more"),
+        "{err}"
+    );
+}
+
 /// `train --pass-action --support-action --support-hold 40 --support-roles 2
 /// --support-only --support-spot facing --approach-action --approach-only
 /// --init-from --pass-init turn_left --support-init-bias 0`: a shipped team
