@@ -15,9 +15,12 @@
 //! The team plays blue in every match; match seeds are 1, 2, ... N (the
 //! team's own sampling is keyed by them as in `eval`).
 
+mod common;
+
 use std::ops::ControlFlow;
 use std::process::ExitCode;
 
+use common::pct;
 use naosoccer_eval::eval::LONG_PASS_METRES;
 use naosoccer_eval::run::{play_one, Fixture, Side};
 use naosoccer_policy::obs::KickReach;
@@ -138,34 +141,17 @@ impl Tally {
     }
 }
 
-fn pct(k: u64, n: u64) -> f64 {
-    100.0 * k as f64 / n.max(1) as f64
-}
-
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let (team, opponent, matches) = match args.as_slice() {
-        [t, o, n] => match n.parse::<u64>() {
-            Ok(n) if n > 0 => (t, o, n),
-            _ => {
-                eprintln!("MATCHES must be a positive integer, not {n:?}");
-                return ExitCode::from(2);
-            }
-        },
-        _ => {
-            eprintln!("usage: pass_chances TEAM OPPONENT MATCHES  (teams as `eval` names them: ppo:DIR, scripted, ...)");
-            return ExitCode::from(2);
-        }
+    let (team, opponent, matches) = match common::team_opponent_matches("pass_chances") {
+        Ok(a) => a,
+        Err(code) => return code,
     };
     let cfg = MatchConfig::default();
     let mut tally = Tally::default();
     for seed in 1..=matches {
-        let (mut first, mut second) = match (Side::parse(team), Side::parse(opponent)) {
-            (Ok(a), Ok(b)) => (a, b),
-            (Err(e), _) | (_, Err(e)) => {
-                eprintln!("{e}");
-                return ExitCode::FAILURE;
-            }
+        let (mut first, mut second) = match common::sides(&team, &opponent) {
+            Ok(s) => s,
+            Err(code) => return code,
         };
         let reach = match &first {
             Side::Learned(p) => p.scale().kick,

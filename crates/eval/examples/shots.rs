@@ -15,10 +15,13 @@
 //!
 //! The team plays blue in every match; match seeds are 1, 2, ... N.
 
+mod common;
+
 use std::ops::ControlFlow;
 use std::process::ExitCode;
 
-use naosoccer_eval::run::{play_one, Fixture, Side};
+use common::pct;
+use naosoccer_eval::run::{play_one, Fixture};
 use naosoccer_proto::{Event, Observation, Team, PLAYERS_PER_TEAM};
 use naosoccer_referee::MatchConfig;
 
@@ -114,36 +117,19 @@ impl Tally {
     }
 }
 
-fn pct(k: u64, n: u64) -> f64 {
-    100.0 * k as f64 / n.max(1) as f64
-}
-
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let (team, opponent, matches) = match args.as_slice() {
-        [t, o, n] => match n.parse::<u64>() {
-            Ok(n) if n > 0 => (t, o, n),
-            _ => {
-                eprintln!("MATCHES must be a positive integer, not {n:?}");
-                return ExitCode::from(2);
-            }
-        },
-        _ => {
-            eprintln!("usage: shots TEAM OPPONENT MATCHES  (teams as `eval` names them: ppo:DIR, scripted, ...)");
-            return ExitCode::from(2);
-        }
+    let (team, opponent, matches) = match common::team_opponent_matches("shots") {
+        Ok(a) => a,
+        Err(code) => return code,
     };
     let cfg = MatchConfig::default();
     let goal_x = cfg.sim.field_length / 2.0;
     let half_mouth = cfg.sim.goal_width / 2.0;
     let mut tally = Tally::default();
     for seed in 1..=matches {
-        let (mut first, mut second) = match (Side::parse(team), Side::parse(opponent)) {
-            (Ok(a), Ok(b)) => (a, b),
-            (Err(e), _) | (_, Err(e)) => {
-                eprintln!("{e}");
-                return ExitCode::FAILURE;
-            }
+        let (mut first, mut second) = match common::sides(&team, &opponent) {
+            Ok(s) => s,
+            Err(code) => return code,
         };
         // The team's observations of the tick before: a kick event's
         // kicker saw the ball there.

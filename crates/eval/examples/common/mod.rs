@@ -1,0 +1,42 @@
+//! What the examples that play a team against an opponent over match
+//! seeds 1..=N share: their command line and the percentages they print.
+
+use std::process::ExitCode;
+
+use naosoccer_eval::run::Side;
+
+/// `TEAM OPPONENT MATCHES` from the command line; `Err` (after a message
+/// naming the example) on anything else.
+pub fn team_opponent_matches(example: &str) -> Result<(String, String, u64), ExitCode> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match args.as_slice() {
+        [t, o, n] => match n.parse::<u64>() {
+            Ok(n) if n > 0 => Ok((t.clone(), o.clone(), n)),
+            _ => {
+                eprintln!("MATCHES must be a positive integer, not {n:?}");
+                Err(ExitCode::from(2))
+            }
+        },
+        _ => {
+            eprintln!("usage: {example} TEAM OPPONENT MATCHES  (teams as `eval` names them: ppo:DIR, scripted, ...)");
+            Err(ExitCode::from(2))
+        }
+    }
+}
+
+/// The two sides of one match, fresh (a learned side's sampling starts
+/// anew); `Err` after printing why one cannot be made.
+pub fn sides(team: &str, opponent: &str) -> Result<(Side, Side), ExitCode> {
+    match (Side::parse(team), Side::parse(opponent)) {
+        (Ok(a), Ok(b)) => Ok((a, b)),
+        (Err(e), _) | (_, Err(e)) => {
+            eprintln!("{e}");
+            Err(ExitCode::FAILURE)
+        }
+    }
+}
+
+/// `k` of `n` in percent (0 when `n` is 0).
+pub fn pct(k: u64, n: u64) -> f64 {
+    100.0 * k as f64 / n.max(1) as f64
+}
