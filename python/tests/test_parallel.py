@@ -98,6 +98,11 @@ def test_defaults_are_the_shipped_teams():
     assert (like.obs_version, like.num_actions) == (2, 9)
     paper = naosoccer.parallel_env(like=TEAM, obs_version=1, decision=None)
     assert (paper.obs_version, paper.num_actions, paper.decision) == (1, 5, None)
+    shots = naosoccer.parallel_env(obs_version=4)
+    obs, _ = shots.reset(seed=1)
+    assert shots.observation_space("blue_0").shape == (92,) and obs["blue_0"].shape == (92,)
+    # Version 4 starts with version 3: the same robots see the same first 89.
+    assert np.array_equal(obs["blue_0"][:89], env.reset(seed=1)[0]["blue_0"])
 
 
 @pytest.mark.parametrize("team,opponent", [("blue", "scripted"), ("red", "random"), ("blue", "scripted:1")])

@@ -258,8 +258,11 @@ pub struct TrainArgs {
     scenario_matches: Option<usize>,
     /// Observation layout version: 2 (the default), 3 (version 2 plus the
     /// pass picture: teammates seen from the robot, whether they face the
-    /// ball, how clear the lane to them is) or 1 (the shipped paper-era
-    /// teams' layout; PPO only). docs/LEARNING.md lists each layout.
+    /// ball, how clear the lane to them is), 4 (version 3 plus the shot
+    /// picture: how clear the lanes from the ball along the heading and to
+    /// the goal are, where the heading meets the goal line) or 1 (the
+    /// shipped paper-era teams' layout; PPO only). docs/LEARNING.md lists
+    /// each layout.
     #[arg(long, hide = true)]
     obs_version: Option<u32>,
     /// Opponent: scripted, a scripted variant (scripted:KEY=VAL,... or

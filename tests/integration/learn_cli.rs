@@ -198,14 +198,15 @@ fn bad_input_gives_clear_errors() {
     }
 }
 
-/// The pass-aware observation layout (version 3): PPO and DQN train on it,
-/// the run records it, its team plays in `eval`, and a checkpoint whose
-/// layout this build cannot encode is refused with a message naming it.
+/// The pass-aware and shot-aware observation layouts (versions 3 and 4):
+/// PPO and DQN train on them, the run records its layout, its team plays in
+/// `eval`, and a checkpoint whose layout this build cannot encode is refused
+/// with a message naming it.
 #[cfg(feature = "train")]
 #[test]
-fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
-    for algo in ["ppo", "dqn"] {
-        let run = dir(&format!("cli_obs3_{algo}"));
+fn observation_layouts_3_and_4_train_play_and_unknown_layouts_are_refused() {
+    for (algo, version) in [("ppo", 3), ("dqn", 3), ("ppo", 4), ("dqn", 4)] {
+        let run = dir(&format!("cli_obs{version}_{algo}"));
         let run_s = run.to_str().unwrap();
         let out = naosoccer(&[
             "train",
@@ -214,7 +215,7 @@ fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
             "--preset",
             "team",
             "--obs-version",
-            "3",
+            &version.to_string(),
             "--steps",
             "2048",
             "--seed",
@@ -235,7 +236,7 @@ fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
         let mut config: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&config_path).unwrap()).unwrap();
         assert_eq!(
-            config["obs_version"], 3,
+            config["obs_version"], version,
             "{algo}: the run records its layout"
         );
 
@@ -268,7 +269,7 @@ fn observation_layout_3_trains_plays_and_unknown_layouts_are_refused() {
         assert!(!out.status.success(), "{algo}: layout 9 must be refused");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(
-            err.contains("observation layout v9") && err.contains("v1 to v3"),
+            err.contains("observation layout v9") && err.contains("v1 to v4"),
             "{algo}: {err}"
         );
     }

@@ -3,7 +3,11 @@
 //! was trained on and refuses to load under a version this build cannot
 //! encode. docs/LEARNING.md lists both layouts; a test checks they agree.
 //!
-//! - Version 3 ([`OBS_DIM`] = 89 entries): version 2, then what a pass
+//! - Version 4 ([`OBS_DIM`] = 92 entries): version 3, then what a shot
+//!   needs: how clear the lane is from the ball along the acting robot's
+//!   heading (where its kick goes) and from the ball to the goal's centre,
+//!   and where that heading meets the goal line.
+//! - Version 3 (89 entries): version 2, then what a pass
 //!   needs seen from the acting robot: each teammate ahead of and beside it
 //!   (where a kick goes), whether that teammate faces the ball, how clear
 //!   the lane from the ball to it is, and the nearest opponent.
@@ -31,10 +35,13 @@ use serde::{Deserialize, Serialize};
 pub const OBS_VERSION: u32 = 2;
 
 /// The newest layout this build encodes.
-pub const OBS_VERSION_LATEST: u32 = 3;
+pub const OBS_VERSION_LATEST: u32 = 4;
 
-/// Row width of observation buffers: the widest layout's length (version 3).
-pub const OBS_DIM: usize = 89;
+/// Row width of observation buffers: the widest layout's length (version 4).
+pub const OBS_DIM: usize = 92;
+
+/// Length of layout version 3.
+pub const OBS_DIM_V3: usize = 89;
 
 /// Length of layout version 2.
 pub const OBS_DIM_V2: usize = 75;
@@ -57,10 +64,21 @@ pub const SET_PLAY_TICKS_SCALE: f32 = 100.0;
 /// segment ball to teammate) is divided by this (metres) and clamped to 1.
 pub const LANE_SCALE: f32 = 1.0;
 
+/// Where a heading that misses the goal line is put in `shot_aim`, and the
+/// clamp of that entry (goal half widths).
+pub const AIM_CLAMP: f32 = 3.0;
+
+/// The entries of layout version 4, in order, as docs/LEARNING.md lists them:
+/// version 3's, then these.
+#[rustfmt::skip]
+pub const FEATURE_NAMES_V4_TAIL: [&str; OBS_DIM - OBS_DIM_V3] = [
+    "shot_lane", "goal_lane", "shot_aim",
+];
+
 /// The entries of layout version 3, in order, as docs/LEARNING.md lists them:
 /// version 2's, then these.
 #[rustfmt::skip]
-pub const FEATURE_NAMES_V3_TAIL: [&str; OBS_DIM - OBS_DIM_V2] = [
+pub const FEATURE_NAMES_V3_TAIL: [&str; OBS_DIM_V3 - OBS_DIM_V2] = [
     "mate1_ahead", "mate1_side", "mate1_faces_ball", "mate1_lane",
     "mate2_ahead", "mate2_side", "mate2_faces_ball", "mate2_lane",
     "mate3_ahead", "mate3_side", "mate3_faces_ball", "mate3_lane",
@@ -111,7 +129,8 @@ pub fn layout_dim(version: u32) -> Option<usize> {
     match version {
         1 => Some(OBS_DIM_V1),
         2 => Some(OBS_DIM_V2),
-        3 => Some(OBS_DIM),
+        3 => Some(OBS_DIM_V3),
+        4 => Some(OBS_DIM),
         _ => None,
     }
 }
@@ -158,6 +177,10 @@ fn default_match_seconds() -> f32 {
     600.0
 }
 
+fn default_goal_half_width() -> f32 {
+    naosoccer_referee::MatchConfig::default().sim.goal_width * 0.5
+}
+
 /// The ball relative to the robot that received `obs`: metres ahead along
 /// its heading and to its left.
 pub fn ball_in_robot_frame(obs: &Observation) -> (f32, f32) {
@@ -183,6 +206,9 @@ pub struct ObsScale {
     /// The match length, seconds (`time_left` is divided by it).
     #[serde(default = "default_match_seconds")]
     pub match_seconds: f32,
+    /// Half the goal's width, metres (version 4's `shot_aim` is divided by it).
+    #[serde(default = "default_goal_half_width")]
+    pub goal_half_width: f32,
 }
 
 impl ObsScale {
@@ -199,6 +225,7 @@ impl ObsScale {
                 half_width: cfg.sim.kick_half_width,
             },
             match_seconds: (cfg.minutes * 60.0).max(1e-3),
+            goal_half_width: cfg.sim.goal_width * 0.5,
         }
     }
 
@@ -225,11 +252,52 @@ impl ObsScale {
                 self.encode_v2(obs, &mut out[..OBS_DIM_V2]);
                 out[OBS_DIM_V2..].fill(0.0);
             }
+            3 => {
+                self.encode_v2(obs, &mut out[..OBS_DIM_V2]);
+                self.encode_v3_tail(obs, &mut out[OBS_DIM_V2..OBS_DIM_V3]);
+                out[OBS_DIM_V3..].fill(0.0);
+            }
             _ => {
                 self.encode_v2(obs, &mut out[..OBS_DIM_V2]);
-                self.encode_v3_tail(obs, &mut out[OBS_DIM_V2..]);
+                self.encode_v3_tail(obs, &mut out[OBS_DIM_V2..OBS_DIM_V3]);
+                self.encode_v4_tail(obs, &mut out[OBS_DIM_V3..]);
             }
         }
+    }
+
+    /// Version 4's entries after version 3's: the shot picture. A kick
+    /// goes from the ball along the kicker's heading, so the lane that
+    /// matters is the segment from the ball that way, as long as the ball's
+    /// distance to the goal's centre; an opponent near it takes the shot.
+    fn encode_v4_tail(&self, obs: &Observation, out: &mut [f32]) {
+        let r = obs.me();
+        let (s, c) = r.heading.sin_cos();
+        let ball = [obs.ball.x, obs.ball.y];
+        let goal = [self.half_length, 0.0];
+        let (gx, gy) = (goal[0] - ball[0], goal[1] - ball[1]);
+        let reach = (gx * gx + gy * gy).sqrt();
+        let end = [ball[0] + c * reach, ball[1] + s * reach];
+        let clearance = |to: [f32; 2]| {
+            let d = obs
+                .opponents
+                .iter()
+                .filter(|o| !o.fallen)
+                .map(|o| segment_distance(ball, to, [o.x, o.y]))
+                .fold(f32::INFINITY, f32::min);
+            (d / LANE_SCALE).min(1.0)
+        };
+        out[0] = clearance(end);
+        out[1] = clearance(goal);
+        // Where the heading line from the ball meets the goal line, in goal
+        // half widths: within +-1 the kick goes between the posts.
+        out[2] = if c > 1e-3 {
+            let y = ball[1] + gx * s / c;
+            (y / self.goal_half_width).clamp(-AIM_CLAMP, AIM_CLAMP)
+        } else if s < 0.0 {
+            -AIM_CLAMP
+        } else {
+            AIM_CLAMP
+        };
     }
 
     /// Version 3's entries after version 2's: the pass picture from the
@@ -431,6 +499,12 @@ mod tests {
                 &FEATURE_NAMES_V3_TAIL[..],
                 OBS_DIM_V2,
             ),
+            (
+                GUIDE,
+                "obs-layout-v4",
+                &FEATURE_NAMES_V4_TAIL[..],
+                OBS_DIM_V3,
+            ),
         ] {
             let doc = documented_layout(doc, tag);
             assert_eq!(
@@ -456,16 +530,11 @@ mod tests {
     }
 
     fn named2(v: &[f32], name: &str) -> f32 {
-        match FEATURE_NAMES.iter().position(|n| *n == name) {
-            Some(i) => v[i],
-            None => {
-                v[OBS_DIM_V2
-                    + FEATURE_NAMES_V3_TAIL
-                        .iter()
-                        .position(|n| *n == name)
-                        .unwrap()]
-            }
-        }
+        let all = FEATURE_NAMES
+            .iter()
+            .chain(&FEATURE_NAMES_V3_TAIL)
+            .chain(&FEATURE_NAMES_V4_TAIL);
+        v[all.clone().position(|n| *n == name).unwrap()]
     }
 
     fn test_scale(version: u32) -> ObsScale {
@@ -479,6 +548,7 @@ mod tests {
                 half_width: 0.11,
             },
             match_seconds: 600.0,
+            goal_half_width: 1.3,
         }
     }
 
@@ -644,7 +714,63 @@ mod tests {
             v2[..OBS_DIM_V2],
             "version 3 starts with version 2"
         );
-        assert_eq!(test_scale(3).dim(), OBS_DIM);
+        assert_eq!(test_scale(3).dim(), OBS_DIM_V3);
+        assert!(v3[OBS_DIM_V3..].iter().all(|&x| x == 0.0));
+        let mut v4 = [7.0; OBS_DIM];
+        test_scale(4).encode(&obs, &mut v4);
+        assert_eq!(
+            v4[..OBS_DIM_V3],
+            v3[..OBS_DIM_V3],
+            "version 4 starts with version 3"
+        );
+        assert_eq!(test_scale(4).dim(), OBS_DIM);
+    }
+
+    #[test]
+    fn version_4_encoding_puts_each_quantity_where_documented() {
+        let mut obs = sample_observation();
+        // Player 2 at (1, -1) faces +x; the ball at (0, -1) is behind it,
+        // but the lane is the ball's: from (0, -1) along +x, as long as the
+        // ball's distance to the goal (3, 0), sqrt(10) m.
+        obs.own[2].heading = 0.0;
+        obs.opponents[3].fallen = true;
+        let scale = test_scale(4);
+        let mut v = [0.0; OBS_DIM];
+        scale.encode(&obs, &mut v);
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+        let n = |v: &[f32], name: &str| named2(v, name);
+        // Standing opponents: 1 and 2 at (0, 0), 1 m from the lane's start;
+        // 0 at (3, 2.25). The fallen one at (-0.3, -0.45) does not count.
+        assert!(close(n(&v, "shot_lane"), 1.0), "{}", n(&v, "shot_lane"));
+        // The segment (0, -1) to (3, 0): the centre is 0.9487 m from it.
+        let to_goal = 0.3f32.hypot(0.9);
+        assert!(close(n(&v, "goal_lane"), to_goal), "{}", n(&v, "goal_lane"));
+        // Along +x from y = -1 the kick meets the goal line 1 m right of the
+        // centre: inside the 1.3 m half width.
+        assert!(close(n(&v, "shot_aim"), -1.0 / 1.3));
+        // Turned onto the goal's centre, the shot's lane is the goal's.
+        obs.own[2].heading = 1.0f32.atan2(3.0);
+        scale.encode(&obs, &mut v);
+        assert!(n(&v, "shot_aim").abs() < 1e-5);
+        assert!(close(n(&v, "shot_lane"), n(&v, "goal_lane")));
+        // A standing opponent on the line: the lane is shut.
+        obs.opponents[3] = RobotObs {
+            x: 1.5,
+            y: -0.5,
+            heading: 0.0,
+            fallen: false,
+            busy: false,
+        };
+        scale.encode(&obs, &mut v);
+        assert!(n(&v, "shot_lane") < 1e-5 && n(&v, "goal_lane") < 1e-5);
+        // Facing away from the goal line, the aim is at its clamp, on the
+        // side the heading turns to.
+        obs.own[2].heading = 2.0;
+        scale.encode(&obs, &mut v);
+        assert_eq!(n(&v, "shot_aim"), AIM_CLAMP);
+        obs.own[2].heading = -2.0;
+        scale.encode(&obs, &mut v);
+        assert_eq!(n(&v, "shot_aim"), -AIM_CLAMP);
     }
 
     #[test]
