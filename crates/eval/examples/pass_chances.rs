@@ -123,19 +123,12 @@ impl Tally {
             }
         }
         println!();
-        let mut lo = 0.0;
-        for (r, &hi) in DIST_ROWS.iter().enumerate() {
-            let label = if hi.is_finite() {
-                format!("{lo:.1}-{hi:.1} m")
-            } else {
-                format!(">={lo:.1} m")
-            };
+        for (r, label) in common::bin_labels(&DIST_ROWS).iter().enumerate() {
             print!("  {label:>9}");
             for c in 0..ANGLE_COLS {
                 print!(" {:>8.1}%", pct(self.nearest[r][c], none));
             }
             println!();
-            lo = hi;
         }
         println!("  every teammate down: {:.1}%", pct(self.all_down, none));
     }

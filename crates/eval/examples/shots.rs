@@ -90,13 +90,7 @@ impl Tally {
             "own %",
             "blocked %"
         );
-        let mut lo = 0.0;
-        for (r, &hi) in DIST_ROWS.iter().enumerate() {
-            let label = if hi.is_finite() {
-                format!("{lo:.1}-{hi:.1} m")
-            } else {
-                format!(">={lo:.1} m")
-            };
+        for (r, label) in common::bin_labels(&DIST_ROWS).iter().enumerate() {
             for aimed in [1, 0] {
                 let o = self.shots[r][aimed];
                 let n: u64 = o.iter().sum();
@@ -112,7 +106,6 @@ impl Tally {
                     pct(self.blocked[r][aimed], n)
                 );
             }
-            lo = hi;
         }
     }
 }

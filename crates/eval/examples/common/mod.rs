@@ -1,5 +1,6 @@
 //! What the examples that play a team against an opponent over match
-//! seeds 1..=N share: their command line and the percentages they print.
+//! seeds 1..=N share: their command line, the distance bins' labels and
+//! the percentages they print.
 
 use std::process::ExitCode;
 
@@ -39,4 +40,21 @@ pub fn sides(team: &str, opponent: &str) -> Result<(Side, Side), ExitCode> {
 /// `k` of `n` in percent (0 when `n` is 0).
 pub fn pct(k: u64, n: u64) -> f64 {
     100.0 * k as f64 / n.max(1) as f64
+}
+
+/// The labels of distance bins whose upper ends are `rows` (the first bin
+/// starts at 0, the last may be open): `"1.0-2.0 m"`, `">=4.5 m"`.
+pub fn bin_labels(rows: &[f32]) -> Vec<String> {
+    let mut lo = 0.0;
+    rows.iter()
+        .map(|&hi| {
+            let label = if hi.is_finite() {
+                format!("{lo:.1}-{hi:.1} m")
+            } else {
+                format!(">={lo:.1} m")
+            };
+            lo = hi;
+            label
+        })
+        .collect()
 }
