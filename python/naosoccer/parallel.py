@@ -26,7 +26,7 @@ from .vector import ACTION_NAMES, ScenarioArg, _require_native, _scenario_args, 
 
 #: The observation layout of the shipped ``ppo-team`` teams
 #: (assets/policies/ppo-team-seed1/config.json): the envs' default.
-TEAM_OBS_VERSION = 3
+TEAM_OBS_VERSION = 4
 
 #: The decision settings (action set and masks) of the shipped ``ppo-team``
 #: teams: nine actions (``pass``, ``support``, ``approach`` and ``defend``

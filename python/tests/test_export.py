@@ -77,6 +77,6 @@ def test_a_torch_actor_exports_and_bad_shapes_are_refused(tmp_path):
     path = export_policy(actor, tmp_path / "torch", env)
     with open(f"{path}/config.json") as f:
         config = json.load(f)
-    assert config["obs_version"] == 3 and config["ppo"]["decision"]["pass"] is True
+    assert config["obs_version"] == 4 and config["ppo"]["decision"]["pass"] is True
     with pytest.raises(ValueError, match="Tanh"):
         export_policy(nn.Sequential(nn.Linear(dim, 16), nn.ReLU(), nn.Linear(16, env.num_actions)), tmp_path / "relu", env)

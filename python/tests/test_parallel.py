@@ -79,7 +79,7 @@ def test_the_aec_api_test_passes():
 def test_defaults_are_the_shipped_teams():
     env = naosoccer.parallel_env()
     version, decision = team_layout(TEAM)
-    assert env.obs_version == version == naosoccer.TEAM_OBS_VERSION == 3
+    assert env.obs_version == version == naosoccer.TEAM_OBS_VERSION == 4
     assert env.decision == decision == dict(naosoccer.TEAM_DECISION)
     assert env.num_actions == 9
     assert env.action_names[-4:] == ("pass", "support", "approach", "defend")
@@ -87,7 +87,7 @@ def test_defaults_are_the_shipped_teams():
     assert env.possible_agents == ["blue_0", "blue_1", "blue_2", "blue_3"]
     assert env.metadata["render_modes"] == ["rgb_array"]
     obs, infos = env.reset(seed=1)
-    assert env.observation_space("blue_0").shape == (89,) and obs["blue_0"].shape == (89,)
+    assert env.observation_space("blue_0").shape == (92,) and obs["blue_0"].shape == (92,)
     assert obs["blue_0"].dtype == np.float32
     assert env.action_space("blue_2").n == 9
     assert infos["blue_0"]["action_mask"].dtype == np.int8
@@ -98,11 +98,11 @@ def test_defaults_are_the_shipped_teams():
     assert (like.obs_version, like.num_actions) == (2, 9)
     paper = naosoccer.parallel_env(like=TEAM, obs_version=1, decision=None)
     assert (paper.obs_version, paper.num_actions, paper.decision) == (1, 5, None)
-    shots = naosoccer.parallel_env(obs_version=4)
-    obs, _ = shots.reset(seed=1)
-    assert shots.observation_space("blue_0").shape == (92,) and obs["blue_0"].shape == (92,)
+    older = naosoccer.parallel_env(obs_version=3)
+    three, _ = older.reset(seed=1)
+    assert older.observation_space("blue_0").shape == (89,) and three["blue_0"].shape == (89,)
     # Version 4 starts with version 3: the same robots see the same first 89.
-    assert np.array_equal(obs["blue_0"][:89], env.reset(seed=1)[0]["blue_0"])
+    assert np.array_equal(env.reset(seed=1)[0]["blue_0"][:89], three["blue_0"])
 
 
 @pytest.mark.parametrize("team,opponent", [("blue", "scripted"), ("red", "random"), ("blue", "scripted:1")])
@@ -132,7 +132,8 @@ def test_self_play_drives_both_teams(binary):
     for p in range(4):
         assert np.isclose(obs[f"red_{p}"][0], -obs["blue_0"][41 + 5 * p])
     # The same actions give the vector env's self-play rows.
-    vec = VectorEnv(1, team="both", minutes=0.1, obs_version=3, decision=dict(naosoccer.TEAM_DECISION))
+    vec = VectorEnv(1, team="both", minutes=0.1, obs_version=naosoccer.TEAM_OBS_VERSION,
+                    decision=dict(naosoccer.TEAM_DECISION))
     vobs, vinfos = vec.reset(seed=5)
     np.testing.assert_array_equal(np.stack([obs[a] for a in env.agents]), vobs[0])
     rng = np.random.default_rng(2)

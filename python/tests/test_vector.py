@@ -179,11 +179,11 @@ def test_threads_end_with_the_env():
 
 def test_masks_follow_a_shipped_teams_actions():
     env = VectorEnv(2, like=TEAM, opponent="idle", minutes=0.1, seed=2)
-    assert env.obs_version == 3 and env.num_actions == 9
+    assert env.obs_version == 4 and env.num_actions == 9
     assert env.action_names == ("forward", "turn_left", "turn_right", "shoot", "stay", "pass", "support",
                                 "approach", "defend")
     obs, infos = env.reset()
-    assert obs.shape == (2, 4, 89)
+    assert obs.shape == (2, 4, 92)
     mask = infos["action_mask"]
     # At kick-off nobody has the ball in reach: no shoot, no pass; support
     # and stay always; the two robots farthest from the ball may not walk
