@@ -401,3 +401,69 @@ fn academy_a_recorded_scenario_replays_identically() {
         text(&out)
     );
 }
+
+/// The training drill at the own goal line
+/// (assets/scenarios/training/goal-line.toml) starts where docs/SCENARIOS.md
+/// says, for either colour: the ball 0.1-0.5 m before the own goal line
+/// inside the posts, own player 1 at it on the field side facing it (so
+/// the own-goal guard holds for it), the keeper on its line, an opponent
+/// pressing from beside the ball. Played with the own team standing still,
+/// it ends within its 15 s by one of its conditions, a success only when
+/// the ball is cleared.
+#[test]
+fn academy_the_goal_line_drill_starts_at_the_own_goal_line() {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenarios/training/goal-line.toml");
+    let s = Scenario::from_toml(&std::fs::read_to_string(&path).unwrap(), None).unwrap();
+    let cfg = MatchConfig::default();
+    let guard = naosoccer_policy::OwnGoalGuard::for_pitch(cfg.sim.field_length, cfg.sim.goal_width);
+    let eps = 1e-3;
+    for seed in 0..8 {
+        for own in Team::BOTH {
+            let m = Match::with_scenario(&cfg, seed, &s, own).unwrap();
+            // Seen by the own team, in its frame (own goal line at x = -3).
+            let o: Observation = m.observe(own, 1);
+            let (bx, by) = (o.ball.x, o.ball.y);
+            assert!(
+                (-2.9 - eps..=-2.5 + eps).contains(&bx) && by.abs() <= 1.0 + eps,
+                "{bx} {by}"
+            );
+            let me = &o.own[1];
+            assert!(me.x - bx >= 0.15 - eps, "{me:?} ball {bx} {by}");
+            assert!(
+                (me.x - bx).hypot(me.y - by) <= 0.45,
+                "{me:?} ball {bx} {by}"
+            );
+            assert!(me.heading.cos() < -0.2, "{me:?}");
+            assert_ne!(guard.banned(&o), 0, "{me:?} ball {bx} {by}");
+            let keeper = &o.own[0];
+            assert!(
+                (keeper.x + 2.85).abs() <= eps && keeper.y.abs() <= 0.8 + eps,
+                "{keeper:?}"
+            );
+            let presser = &o.opponents[1];
+            assert!((presser.x - bx).hypot(presser.y - by) <= 0.8, "{presser:?}");
+        }
+    }
+    let v = json_of(&[
+        "match",
+        "--scenario",
+        path.to_str().unwrap(),
+        "--blue",
+        "idle",
+        "--red",
+        "scripted",
+        "--seed",
+        "1",
+        "--json",
+    ]);
+    let sc = &v["scenario"];
+    assert_eq!(sc["name"], "goal-line");
+    assert!(sc["ticks"].as_u64().unwrap() <= 150, "{v}");
+    let ending = sc["ending"].as_str().unwrap();
+    assert!(
+        ["goal_against", "ball_out", "region", "time_up"].contains(&ending),
+        "{v}"
+    );
+    assert_eq!(sc["success"], ending == "region", "{v}");
+}

@@ -2,6 +2,9 @@
 //! seeds 1..=N share: their command line, the distance bins' labels and
 //! the percentages they print.
 
+// Each example compiles this module for itself and uses a part of it.
+#![allow(dead_code)]
+
 use std::process::ExitCode;
 
 use naosoccer_eval::run::Side;
