@@ -32,7 +32,6 @@ use std::collections::VecDeque;
 use std::ops::ControlFlow;
 use std::process::ExitCode;
 
-use naosoccer_eval::run::{play_one, Fixture};
 use naosoccer_policy::OwnGoalGuard;
 use naosoccer_proto::{Action, Event, GoalPhase, Team, PLAYERS_PER_TEAM};
 use naosoccer_referee::MatchConfig;
@@ -91,69 +90,60 @@ fn main() -> ExitCode {
         "opp dist"
     );
     for seed in 1..=matches {
-        let (mut first, mut second) = match common::sides(&team, &opponent) {
-            Ok(s) => s,
-            Err(code) => return code,
-        };
         let mut scene: VecDeque<Frame> = VecDeque::with_capacity(SCENE_TICKS + 1);
         // The team's last kick: (tick, robot).
         let mut last_kick: Option<(u64, usize)> = None;
-        let played = play_one(
-            &cfg,
-            &mut first,
-            &mut second,
-            Fixture::kick_off(seed),
-            |t| {
-                let now = t.m.tick().get();
-                let first_obs = t.m.observe(Team::Blue, 0);
-                let b = first_obs.ball;
-                let frame = Frame {
-                    ball: [b.x, b.y],
-                    robots: std::array::from_fn(|p| {
-                        let o = t.m.observe(Team::Blue, p);
-                        let me = o.own[p];
-                        (
-                            (me.x - b.x).hypot(me.y - b.y),
-                            me.heading.cos(),
-                            me.fallen,
-                            t.actions[p],
-                            guard.banned(&o) != 0,
-                        )
-                    }),
-                    opponent: first_obs
-                        .opponents
-                        .iter()
-                        .map(|r| (r.x - b.x).hypot(r.y - b.y))
-                        .fold(f32::INFINITY, f32::min),
-                };
-                if scene.len() == SCENE_TICKS {
-                    scene.pop_front();
-                }
-                scene.push_back(frame);
-                for e in t.events {
-                    match e {
-                        Event::Kick { robot, .. } if robot.team() == Team::Blue => {
-                            last_kick = Some((now, robot.player()));
-                        }
-                        Event::Goal { team, .. } if *team != Team::Blue => goals_against += 1,
-                        _ => {}
+        let played = common::play_match(&cfg, &team, &opponent, seed, |t| {
+            let now = t.m.tick().get();
+            let first_obs = t.m.observe(Team::Blue, 0);
+            let b = first_obs.ball;
+            let frame = Frame {
+                ball: [b.x, b.y],
+                robots: std::array::from_fn(|p| {
+                    let o = t.m.observe(Team::Blue, p);
+                    let me = o.own[p];
+                    (
+                        (me.x - b.x).hypot(me.y - b.y),
+                        me.heading.cos(),
+                        me.fallen,
+                        t.actions[p],
+                        guard.banned(&o) != 0,
+                    )
+                }),
+                opponent: first_obs
+                    .opponents
+                    .iter()
+                    .map(|r| (r.x - b.x).hypot(r.y - b.y))
+                    .fold(f32::INFINITY, f32::min),
+            };
+            if scene.len() == SCENE_TICKS {
+                scene.pop_front();
+            }
+            scene.push_back(frame);
+            for e in t.events {
+                match e {
+                    Event::Kick { robot, .. } if robot.team() == Team::Blue => {
+                        last_kick = Some((now, robot.player()));
                     }
-                    let Event::Goal {
-                        team: Team::Red,
-                        phase: Some(GoalPhase::OwnGoal),
-                        ..
-                    } = e
-                    else {
-                        continue;
-                    };
-                    let minute = now as f64 / hz / 60.0;
-                    // The scene before the goal's tick (the ball is already
-                    // reset in this one).
-                    let before: Vec<&Frame> = scene.iter().rev().skip(1).collect();
-                    let ball_x = before.first().map_or(f32::NAN, |f| f.ball[0]);
-                    if let Some((k, p)) = last_kick.filter(|(k, _)| now - k <= SCENE_TICKS as u64) {
-                        tally.kick += 1;
-                        println!(
+                    Event::Goal { team, .. } if *team != Team::Blue => goals_against += 1,
+                    _ => {}
+                }
+                let Event::Goal {
+                    team: Team::Red,
+                    phase: Some(GoalPhase::OwnGoal),
+                    ..
+                } = e
+                else {
+                    continue;
+                };
+                let minute = now as f64 / hz / 60.0;
+                // The scene before the goal's tick (the ball is already
+                // reset in this one).
+                let before: Vec<&Frame> = scene.iter().rev().skip(1).collect();
+                let ball_x = before.first().map_or(f32::NAN, |f| f.ball[0]);
+                if let Some((k, p)) = last_kick.filter(|(k, _)| now - k <= SCENE_TICKS as u64) {
+                    tally.kick += 1;
+                    println!(
                             "{seed:>5} {minute:>6.2} {:>5} {p:>6} {:>7.1} {:>8} {:>7} {:>7} {:>7} {ball_x:>7.2} {:>9.2}",
                             "kick",
                             (now - k) as f64 / hz,
@@ -163,45 +153,45 @@ fn main() -> ExitCode {
                             "-",
                             before.first().map_or(f32::NAN, |f| f.opponent)
                         );
-                        continue;
-                    }
-                    // The team's last contact: the latest tick with one of
-                    // its robots within touching distance of the ball.
-                    let contact = before.iter().enumerate().find_map(|(i, f)| {
-                        let (p, r) = f
-                            .robots
-                            .iter()
-                            .enumerate()
-                            .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))?;
-                        (r.0 < CONTACT_METRES).then_some((i, p))
-                    });
-                    let Some((i, p)) = contact else {
-                        tally.rolled += 1;
-                        println!(
+                    continue;
+                }
+                // The team's last contact: the latest tick with one of
+                // its robots within touching distance of the ball.
+                let contact = before.iter().enumerate().find_map(|(i, f)| {
+                    let (p, r) = f
+                        .robots
+                        .iter()
+                        .enumerate()
+                        .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0))?;
+                    (r.0 < CONTACT_METRES).then_some((i, p))
+                });
+                let Some((i, p)) = contact else {
+                    tally.rolled += 1;
+                    println!(
                             "{seed:>5} {minute:>6.2} {:>5} {:>6} {:>7} {:>8} {:>7} {:>7} {:>7} {ball_x:>7.2} {:>9}",
                             "roll", "-", ">3.0", "-", "-", "-", "-", "-"
                         );
-                        continue;
-                    };
-                    let f = before[i];
-                    let r = f.robots[p];
-                    let dist = r.0;
-                    let facing = r.1 < -0.2;
-                    let guarded = before.iter().any(|f| f.robots[p].4);
-                    let kind = if r.2 { "fall" } else { "walk" };
-                    if r.2 {
-                        tally.fall += 1;
-                    } else {
-                        tally.walk += 1;
-                        tally.walk_facing += u64::from(facing);
-                        tally.walk_guarded += u64::from(guarded);
-                        match r.3 {
-                            Action::Forward => tally.walk_forward += 1,
-                            Action::TurnLeft | Action::TurnRight => tally.walk_turn += 1,
-                            _ => {}
-                        }
+                    continue;
+                };
+                let f = before[i];
+                let r = f.robots[p];
+                let dist = r.0;
+                let facing = r.1 < -0.2;
+                let guarded = before.iter().any(|f| f.robots[p].4);
+                let kind = if r.2 { "fall" } else { "walk" };
+                if r.2 {
+                    tally.fall += 1;
+                } else {
+                    tally.walk += 1;
+                    tally.walk_facing += u64::from(facing);
+                    tally.walk_guarded += u64::from(guarded);
+                    match r.3 {
+                        Action::Forward => tally.walk_forward += 1,
+                        Action::TurnLeft | Action::TurnRight => tally.walk_turn += 1,
+                        _ => {}
                     }
-                    println!(
+                }
+                println!(
                         "{seed:>5} {minute:>6.2} {kind:>5} {p:>6} {:>7.1} {:>8} {dist:>7.2} {:>7} {:>7} {:>7.2} {:>9.2}",
                         (i + 1) as f64 / hz,
                         format!("{:?}", r.3),
@@ -210,13 +200,11 @@ fn main() -> ExitCode {
                         f.ball[0],
                         f.opponent
                     );
-                }
-                ControlFlow::Continue(())
-            },
-        );
-        if let Err(e) = played {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
+            }
+            ControlFlow::Continue(())
+        });
+        if let Err(code) = played {
+            return code;
         }
     }
     let own = tally.kick + tally.fall + tally.walk + tally.rolled;

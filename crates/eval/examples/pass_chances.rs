@@ -22,7 +22,7 @@ use std::process::ExitCode;
 
 use common::pct;
 use naosoccer_eval::eval::LONG_PASS_METRES;
-use naosoccer_eval::run::{play_one, Fixture, Side};
+use naosoccer_eval::run::Side;
 use naosoccer_policy::obs::KickReach;
 use naosoccer_proto::{pass_receiver, Action, Event, Observation, Team, PLAYERS_PER_TEAM};
 use naosoccer_referee::rules::wrap_angle;
@@ -140,55 +140,45 @@ fn main() -> ExitCode {
         Err(code) => return code,
     };
     let cfg = MatchConfig::default();
+    let reach = match common::sides(&team, &opponent) {
+        Ok((Side::Learned(p), _)) => p.scale().kick,
+        Ok((Side::Builtin(_), _)) => KickReach::default(),
+        Err(code) => return code,
+    };
     let mut tally = Tally::default();
     for seed in 1..=matches {
-        let (mut first, mut second) = match common::sides(&team, &opponent) {
-            Ok(s) => s,
-            Err(code) => return code,
-        };
-        let reach = match &first {
-            Side::Learned(p) => p.scale().kick,
-            Side::Builtin(_) => KickReach::default(),
-        };
         // The observations the actions of the next tick answer.
         let mut before: Option<[Observation; PLAYERS_PER_TEAM]> = None;
         // Per robot of the team: whether its latest kicking action
         // (`shoot` or `pass`) was `pass`.
         let mut kicked_by_pass = [false; PLAYERS_PER_TEAM];
-        let played = play_one(
-            &cfg,
-            &mut first,
-            &mut second,
-            Fixture::kick_off(seed),
-            |t| {
-                if let Some(obs) = &before {
-                    for (p, o) in obs.iter().enumerate() {
-                        if o.set_play.is_none() && reach.in_reach(o) {
-                            tally.count(o, t.actions[p]);
-                        }
+        let played = common::play_match(&cfg, &team, &opponent, seed, |t| {
+            if let Some(obs) = &before {
+                for (p, o) in obs.iter().enumerate() {
+                    if o.set_play.is_none() && reach.in_reach(o) {
+                        tally.count(o, t.actions[p]);
                     }
                 }
-                for (p, a) in t.actions[..PLAYERS_PER_TEAM].iter().enumerate() {
-                    match a {
-                        Action::Pass => kicked_by_pass[p] = true,
-                        Action::Shoot => kicked_by_pass[p] = false,
-                        _ => {}
+            }
+            for (p, a) in t.actions[..PLAYERS_PER_TEAM].iter().enumerate() {
+                match a {
+                    Action::Pass => kicked_by_pass[p] = true,
+                    Action::Shoot => kicked_by_pass[p] = false,
+                    _ => {}
+                }
+            }
+            for e in t.events {
+                if let Event::Pass { from, distance, .. } = e {
+                    if from.team() == Team::Blue {
+                        tally.pass_event(kicked_by_pass[from.player()], *distance);
                     }
                 }
-                for e in t.events {
-                    if let Event::Pass { from, distance, .. } = e {
-                        if from.team() == Team::Blue {
-                            tally.pass_event(kicked_by_pass[from.player()], *distance);
-                        }
-                    }
-                }
-                before = Some(std::array::from_fn(|p| t.m.observe(Team::Blue, p)));
-                ControlFlow::Continue(())
-            },
-        );
-        if let Err(e) = played {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
+            }
+            before = Some(std::array::from_fn(|p| t.m.observe(Team::Blue, p)));
+            ControlFlow::Continue(())
+        });
+        if let Err(code) = played {
+            return code;
         }
     }
     println!("{team} (blue) against {opponent}, {matches} matches");

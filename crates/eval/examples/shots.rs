@@ -21,7 +21,6 @@ use std::ops::ControlFlow;
 use std::process::ExitCode;
 
 use common::pct;
-use naosoccer_eval::run::{play_one, Fixture};
 use naosoccer_proto::{Event, Observation, Team, PLAYERS_PER_TEAM};
 use naosoccer_referee::MatchConfig;
 
@@ -120,83 +119,72 @@ fn main() -> ExitCode {
     let half_mouth = cfg.sim.goal_width / 2.0;
     let mut tally = Tally::default();
     for seed in 1..=matches {
-        let (mut first, mut second) = match common::sides(&team, &opponent) {
-            Ok(s) => s,
-            Err(code) => return code,
-        };
         // The team's observations of the tick before: a kick event's
         // kicker saw the ball there.
         let mut before: Option<[Observation; PLAYERS_PER_TEAM]> = None;
         let mut open: Option<Open> = None;
-        let played = play_one(
-            &cfg,
-            &mut first,
-            &mut second,
-            Fixture::kick_off(seed),
-            |t| {
-                for e in t.events {
-                    match e {
-                        Event::Goal { team, .. } => {
-                            if *team == Team::Blue {
-                                tally.close(&mut open, Outcome::Goal);
-                            } else {
-                                open = None;
-                            }
+        let played = common::play_match(&cfg, &team, &opponent, seed, |t| {
+            for e in t.events {
+                match e {
+                    Event::Goal { team, .. } => {
+                        if *team == Team::Blue {
+                            tally.close(&mut open, Outcome::Goal);
+                        } else {
+                            open = None;
                         }
-                        Event::BallOut { .. } => tally.close(&mut open, Outcome::Out),
-                        Event::Kick {
-                            robot, receiver, ..
-                        } => {
-                            if robot.team() != Team::Blue {
-                                tally.close(&mut open, Outcome::Opponent);
-                                continue;
-                            }
-                            tally.close(&mut open, Outcome::Own);
-                            let Some(obs) = before.as_ref().map(|o| &o[robot.player()]) else {
-                                continue;
-                            };
-                            if receiver.is_some() || obs.set_play.is_some() {
-                                continue;
-                            }
-                            let (bx, by) = (obs.ball.x, obs.ball.y);
-                            let d = (goal_x - bx).hypot(by);
-                            let row = DIST_ROWS.iter().position(|&m| d < m).unwrap_or(0);
-                            let h = obs.own[robot.player()].heading;
-                            // Where the heading's line from the ball meets the
-                            // goal line, if it points at it.
-                            let on_target = h.cos() > 1e-3 && {
-                                let y = by + (goal_x - bx) * h.tan();
-                                y.abs() < half_mouth
-                            };
-                            // The heading's segment from the ball to the goal
-                            // line (or 6 m along it when it points away).
-                            let (c, sn) = (h.cos(), h.sin());
-                            let len = if c > 1e-3 {
-                                ((goal_x - bx) / c).clamp(0.0, 6.0)
-                            } else {
-                                6.0
-                            };
-                            let blocked = obs.opponents.iter().any(|r| {
-                                let (dx, dy) = (r.x - bx, r.y - by);
-                                let along = (dx * c + dy * sn).clamp(0.0, len);
-                                (dx - along * c).hypot(dy - along * sn) < LANE_METRES
-                            });
-                            open = Some(Open {
-                                row,
-                                on_target,
-                                blocked,
-                            });
-                        }
-                        _ => {}
                     }
+                    Event::BallOut { .. } => tally.close(&mut open, Outcome::Out),
+                    Event::Kick {
+                        robot, receiver, ..
+                    } => {
+                        if robot.team() != Team::Blue {
+                            tally.close(&mut open, Outcome::Opponent);
+                            continue;
+                        }
+                        tally.close(&mut open, Outcome::Own);
+                        let Some(obs) = before.as_ref().map(|o| &o[robot.player()]) else {
+                            continue;
+                        };
+                        if receiver.is_some() || obs.set_play.is_some() {
+                            continue;
+                        }
+                        let (bx, by) = (obs.ball.x, obs.ball.y);
+                        let d = (goal_x - bx).hypot(by);
+                        let row = DIST_ROWS.iter().position(|&m| d < m).unwrap_or(0);
+                        let h = obs.own[robot.player()].heading;
+                        // Where the heading's line from the ball meets the
+                        // goal line, if it points at it.
+                        let on_target = h.cos() > 1e-3 && {
+                            let y = by + (goal_x - bx) * h.tan();
+                            y.abs() < half_mouth
+                        };
+                        // The heading's segment from the ball to the goal
+                        // line (or 6 m along it when it points away).
+                        let (c, sn) = (h.cos(), h.sin());
+                        let len = if c > 1e-3 {
+                            ((goal_x - bx) / c).clamp(0.0, 6.0)
+                        } else {
+                            6.0
+                        };
+                        let blocked = obs.opponents.iter().any(|r| {
+                            let (dx, dy) = (r.x - bx, r.y - by);
+                            let along = (dx * c + dy * sn).clamp(0.0, len);
+                            (dx - along * c).hypot(dy - along * sn) < LANE_METRES
+                        });
+                        open = Some(Open {
+                            row,
+                            on_target,
+                            blocked,
+                        });
+                    }
+                    _ => {}
                 }
-                before = Some(std::array::from_fn(|p| t.m.observe(Team::Blue, p)));
-                ControlFlow::Continue(())
-            },
-        );
-        if let Err(e) = played {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
+            }
+            before = Some(std::array::from_fn(|p| t.m.observe(Team::Blue, p)));
+            ControlFlow::Continue(())
+        });
+        if let Err(code) = played {
+            return code;
         }
         tally.unresolved += u64::from(open.is_some());
     }

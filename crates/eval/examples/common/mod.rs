@@ -1,13 +1,15 @@
 //! What the examples that play a team against an opponent over match
-//! seeds 1..=N share: their command line, the distance bins' labels and
-//! the percentages they print.
+//! seeds 1..=N share: their command line, playing one of those matches,
+//! the distance bins' labels and the percentages they print.
 
 // Each example compiles this module for itself and uses a part of it.
 #![allow(dead_code)]
 
+use std::ops::ControlFlow;
 use std::process::ExitCode;
 
-use naosoccer_eval::run::Side;
+use naosoccer_eval::run::{play_one, Fixture, Side, Ticked};
+use naosoccer_referee::MatchConfig;
 
 /// `TEAM OPPONENT MATCHES` from the command line; `Err` (after a message
 /// naming the example) on anything else.
@@ -38,6 +40,25 @@ pub fn sides(team: &str, opponent: &str) -> Result<(Side, Side), ExitCode> {
             Err(ExitCode::FAILURE)
         }
     }
+}
+
+/// Plays the kick-off match `seed` of fresh sides, `team` blue against
+/// `opponent`, calling `watch` after every control tick; `Err` after
+/// printing why it could not be played.
+pub fn play_match(
+    cfg: &MatchConfig,
+    team: &str,
+    opponent: &str,
+    seed: u64,
+    watch: impl FnMut(&Ticked<'_>) -> ControlFlow<()>,
+) -> Result<(), ExitCode> {
+    let (mut first, mut second) = sides(team, opponent)?;
+    play_one(cfg, &mut first, &mut second, Fixture::kick_off(seed), watch)
+        .map(|_| ())
+        .map_err(|e| {
+            eprintln!("{e}");
+            ExitCode::FAILURE
+        })
 }
 
 /// `k` of `n` in percent (0 when `n` is 0).
