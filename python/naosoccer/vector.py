@@ -42,6 +42,7 @@ ACTION_NAMES = (
     "support",
     "approach",
     "defend",
+    "give",
 )
 
 _TEAMS = ("blue", "red", "both")
@@ -115,7 +116,7 @@ class VectorEnv(_GymVectorEnv):
       ``team="both"``), each in its own team's frame, in layout
       ``obs_version`` (docs/PYTHON.md);
     * actions: ints ``(num_matches, robots)``, indices into
-      :data:`ACTION_NAMES` below the action count (5, or 6 to 9 with the
+      :data:`ACTION_NAMES` below the action count (5, or 6 to 10 with the
       ``decision`` settings of the shipped teams);
     * rewards: float32 ``(num_matches, robots)``, each robot's reward under
       the match configuration's ``[reward]``;

@@ -177,6 +177,28 @@ def test_threads_end_with_the_env():
     assert VectorEnv(2, opponent="idle", threads=8).threads == 2
 
 
+def test_a_give_action_has_its_own_output_and_mask():
+    # The shipped teams' settings and `give`: ten actions, the last one
+    # `give`, allowed only where the robot has a teammate to give to.
+    import naosoccer
+    decision = dict(naosoccer.TEAM_DECISION, give=True)
+    env = VectorEnv(2, decision=decision, obs_version=4, opponent="idle", minutes=0.1, seed=3)
+    assert env.num_actions == 10 and env.action_names[-1] == "give"
+    obs, infos = env.reset()
+    mask = infos["action_mask"]
+    assert mask.shape == (2, 4, 10)
+    seen_give = False
+    for _ in range(60):
+        seen_give |= bool(mask[..., 9].any())
+        # Give wherever it is allowed, else stay.
+        actions = np.where(mask[..., 9], 9, 4)
+        _, _, _, _, infos = env.step(actions)
+        mask = infos["action_mask"]
+    assert seen_give, "no robot ever had a teammate to give to"
+    # A team without `give` has nine actions.
+    assert VectorEnv(1, decision=naosoccer.TEAM_DECISION, obs_version=4, opponent="idle").num_actions == 9
+
+
 def test_masks_follow_a_shipped_teams_actions():
     env = VectorEnv(2, like=TEAM, opponent="idle", minutes=0.1, seed=2)
     assert env.obs_version == 4 and env.num_actions == 9

@@ -67,7 +67,7 @@ pub struct TrainArgs {
     #[arg(long, value_name = "FILE", conflicts_with_all = [
         "algo", "steps", "resume", "preset", "persist", "no_shoot_mask", "pass_action",
         "support_action", "support_hold", "support_roles", "support_only", "support_spot",
-        "approach_action", "approach_only", "defend_action", "own_goal_guard", "init_from", "pass_init", "support_init_bias",
+        "approach_action", "approach_only", "defend_action", "give_action", "own_goal_guard", "init_from", "pass_init", "support_init_bias",
         "central_critic", "minibatches", "entropy_coef", "entropy_coef_end", "gamma", "target_kl", "lr", "drill",
         "scenarios", "scenario_matches", "obs_version", "opponent",
         "matches", "torch_threads", "config", "minutes", "learners", "teammates",
@@ -174,6 +174,21 @@ pub struct TrainArgs {
     /// configuration.
     #[arg(long, hide = true, requires = "support_action")]
     defend_action: bool,
+    /// PPO or DQN team preset, with --pass-action, --approach-action and
+    /// --defend-action: give the robots a tenth action, `give`, a pass lined
+    /// up: the robot walks round behind the ball onto the line from a free
+    /// teammate 1.2-3.5 m from the ball through the ball (as `approach` lines
+    /// up on the goal; teammates ahead of the ball first, then the one
+    /// needing the least walk round the ball) and into the ball, and sends
+    /// the protocol's `pass` once the ball is in kick reach and the pass
+    /// rule names a receiver. Possible while there is such a teammate; with
+    /// --support-roles only for the chasers; held under --support-hold until
+    /// the ball is more than 1 m away (its pass made). Recorded in the run's
+    /// configuration. A team with nine actions starting from --init-from
+    /// gains `give` as a copy of `approach`, its bias --support-init-bias
+    /// lower.
+    #[arg(long, hide = true, requires_all = ["pass_action", "approach_action", "defend_action"])]
+    give_action: bool,
     /// Team presets: the own-goal guard. Near its own goal line (the ball
     /// within 0.6 m of it, in front of the goal) a robot facing its own
     /// goal with the ball just ahead may not walk `forward` or `shoot`, so
@@ -455,6 +470,7 @@ pub(crate) fn run_train(
         d.approach = a.approach_action;
         d.approach_only = a.approach_only;
         d.defend = a.defend_action;
+        d.give = a.give_action;
         let sim = &cfg.match_config.sim;
         d.own_goal_guard = a
             .own_goal_guard

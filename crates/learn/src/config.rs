@@ -482,7 +482,7 @@ impl DqnConfig {
     }
 
     /// How many actions the Q-network values: 5 (the paper's, and the
-    /// `team` preset's by default), up to 9 with the decision settings'
+    /// `team` preset's by default), up to 10 with the decision settings'
     /// extra actions ([`DecisionConfig::actions`]).
     pub fn actions(&self) -> usize {
         action_count(self.decision)

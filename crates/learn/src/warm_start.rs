@@ -16,7 +16,8 @@ use crate::LearnError;
 /// possible). `pass_from` must be one of the paper's five actions. A gained
 /// `support` row starts as `forward`'s with its bias `support_bias` lower,
 /// a gained `approach` row as an exact copy of `forward`'s, a gained
-/// `defend` row as `support`'s with its bias `support_bias` lower.
+/// `defend` row as `support`'s with its bias `support_bias` lower, a gained
+/// `give` row as `approach`'s with its bias `support_bias` lower.
 pub fn init_weights(
     ppo: &mut Ppo,
     path: &Path,
@@ -57,17 +58,18 @@ pub fn init_weights(
             // SUPPORT_INIT_BIAS so that it starts rarer than `forward`) and
             // `approach` (an exact copy of `forward`) and `defend` (a copy
             // of `support`, its bias lowered by `support_bias`).
-            let (pass, support, approach, defend) = (
+            let (pass, support, approach, defend, give) = (
                 NetAction::Pass.index() as i64,
                 NetAction::Support.index() as i64,
                 NetAction::Approach.index() as i64,
                 NetAction::Defend.index() as i64,
+                NetAction::Give.index() as i64,
             );
             let widen = name.starts_with("actor.")
                 && !want.is_empty()
                 && want[1..] == got[1..]
-                && (pass..=defend).contains(&got[0])
-                && (pass + 1..=defend + 1).contains(&want[0])
+                && (pass..=give).contains(&got[0])
+                && (pass + 1..=give + 1).contains(&want[0])
                 && want[0] > got[0];
             if want == got {
                 var.copy_(src);
@@ -89,7 +91,7 @@ pub fn init_weights(
                 if got[0] <= approach && want[0] > approach {
                     var.narrow(0, approach, 1).copy_(&forward);
                 }
-                if want[0] > defend {
+                if got[0] <= defend && want[0] > defend {
                     let support_row = var.narrow(0, support, 1).copy();
                     let row = if want.len() == 1 {
                         &support_row - f64::from(support_bias)
@@ -97,6 +99,15 @@ pub fn init_weights(
                         support_row
                     };
                     var.narrow(0, defend, 1).copy_(&row);
+                }
+                if want[0] > give {
+                    let approach_row = var.narrow(0, approach, 1).copy();
+                    let row = if want.len() == 1 {
+                        &approach_row - f64::from(support_bias)
+                    } else {
+                        approach_row
+                    };
+                    var.narrow(0, give, 1).copy_(&row);
                 }
             } else {
                 return Err(bad(format!(

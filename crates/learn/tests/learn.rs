@@ -1745,6 +1745,52 @@ fn init_from_widens_the_actor_for_the_defend_action() {
     }
 }
 
+/// `--init-from` with `give`: a nine-action team (the shipped teams' set)
+/// seeds a ten-action actor. The old logits carry over and `give` starts
+/// as `approach` with its bias lowered by the support bias, so it starts
+/// rarer than the walk it resembles.
+#[test]
+fn init_from_widens_the_actor_for_the_give_action() {
+    use naosoccer_learn::ppo::Ppo;
+    use naosoccer_learn::warm_start::init_weights;
+    use naosoccer_policy::NetAction;
+    let _g = torch_lock();
+    let scale = naosoccer_learn::ObsScale::from_config(&MatchConfig::default());
+    let [_, _, _, eight] = widening_configs();
+    let mut nine = eight.clone();
+    nine.decision.as_mut().unwrap().defend = true;
+    let mut ten = nine.clone();
+    ten.decision.as_mut().unwrap().give = true;
+    assert_eq!((nine.actions(), ten.actions()), (9, 10));
+    let dir = out_dir("init_from_give");
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 5;
+    let rows = random_rows(8, n);
+    let logits = |p: &Ppo| actor_logits(p, &rows, n);
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-5;
+    let src = Ppo::new(nine, &scale, 4).unwrap();
+    let file = dir.join("from9.safetensors");
+    naosoccer_learn::policy::save_stores(&[&src.net.vs], &file).unwrap();
+    let before = logits(&src);
+    let mut dst = Ppo::new(ten, &scale, 4).unwrap();
+    init_weights(&mut dst, &file, Action::Shoot, 0.75).unwrap();
+    let after = logits(&dst);
+    for i in 0..n {
+        for a in 0..9 {
+            assert!(
+                close(after[i * 10 + a], before[i * 9 + a]),
+                "row {i}, action {a}"
+            );
+        }
+        let approach = before[i * 9 + NetAction::Approach.index()];
+        let give = after[i * 10 + NetAction::Give.index()];
+        assert!(
+            close(give, approach - 0.75),
+            "row {i}: give {give} approach {approach}"
+        );
+    }
+}
+
 /// The trainer itself (not only the CLI) refuses decision settings that
 /// lack what they build on: `approach` or a support spot without
 /// `support`, `approach_only` without `approach`, roles without `support`;
@@ -1780,6 +1826,14 @@ fn decision_settings_without_their_prerequisites_are_refused() {
             d.approach_only = true;
         },
         "--approach-action",
+    );
+    refused(
+        &|d| {
+            d.support = true;
+            d.approach = true;
+            d.give = true;
+        },
+        "--give-action",
     );
     // DQN's team preset takes the same actions and the same checks; a warm
     // start stays PPO's.

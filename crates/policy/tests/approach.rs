@@ -70,7 +70,7 @@ fn approach_goes_round_behind_the_ball_and_takes_it_toward_the_goal() {
             break;
         }
         let mut joint = [Action::Stay; ROBOTS];
-        joint[1] = to_action(NetAction::Approach, &obs, h, SupportSpot::Ahead);
+        joint[1] = to_action(NetAction::Approach, &obs, h, SupportSpot::Ahead, &reach);
         assert_eq!(joint[1], approach_action(&obs, h));
         m.step(&joint);
     }
@@ -169,8 +169,20 @@ fn the_facing_spot_lies_where_the_kicker_faces() {
     assert!((ahead[1] - (ball.1 - 1.0)).abs() < 1e-5, "{ahead:?}");
     // The support action walks toward the spot it is given.
     assert_ne!(
-        to_action(NetAction::Support, &obs, h, SupportSpot::Facing),
-        to_action(NetAction::Support, &obs, h, SupportSpot::Ahead)
+        to_action(
+            NetAction::Support,
+            &obs,
+            h,
+            SupportSpot::Facing,
+            &KickReach::default()
+        ),
+        to_action(
+            NetAction::Support,
+            &obs,
+            h,
+            SupportSpot::Ahead,
+            &KickReach::default()
+        )
     );
     // The kicker on blue's own side of the ball: both spots ahead.
     let m = staged((-0.4, 0.0, 0.0), (0.5, -1.0, 0.0), (0.0, 0.0));

@@ -8,6 +8,7 @@ use naosoccer_policy::actions::{
     banned_actions, defend_action, defend_spot, DecisionConfig, Hold, SupportSpot, DEFEND_BEHIND,
     DEFEND_GOAL_MIN, ROLE_BANNED, SUPPORT_ARRIVE,
 };
+use naosoccer_policy::obs::KickReach;
 use naosoccer_policy::{to_action, NetAction};
 use naosoccer_proto::{Action, Observation, Team, ROBOTS};
 use naosoccer_referee::{Match, MatchConfig};
@@ -65,7 +66,13 @@ fn walks_back_between_ball_and_goal(team: Team) {
     let mut arrived = None;
     for t in 0..1200 {
         let obs = m.observe(team, player);
-        let step = to_action(NetAction::Defend, &obs, h, SupportSpot::Facing);
+        let step = to_action(
+            NetAction::Defend,
+            &obs,
+            h,
+            SupportSpot::Facing,
+            &KickReach::default(),
+        );
         assert_eq!(step, defend_action(&obs, h));
         let spot = defend_spot(&obs, h);
         let me = obs.me();
@@ -189,7 +196,13 @@ fn a_held_defend_ends_on_arrival() {
     let mut ended = None;
     for t in 1..60 {
         let mut joint = [Action::Stay; ROBOTS];
-        joint[1] = to_action(hold.held(&obs), &obs, h, d.support_spot);
+        joint[1] = to_action(
+            hold.held(&obs),
+            &obs,
+            h,
+            d.support_spot,
+            &KickReach::default(),
+        );
         m.step(&joint);
         obs = m.observe(Team::Blue, 1);
         if hold.must_decide(&obs) {

@@ -417,7 +417,7 @@ fn step_match(
 ) -> Result<(), LearnError> {
     // A network opponent's actions came from its batched forward pass.
     let opp = mix.kinds[slot.opp].is_none().then_some(opp_actions);
-    let done = slot.step(env, actions, opp, rewards);
+    let done = slot.step(env, &scale.kick, actions, opp, rewards);
     dones.fill(done);
     let cut = done && !slot.game.match_ref().is_finished();
     truncated.fill(cut);
@@ -459,6 +459,7 @@ impl Slot {
     fn step(
         &mut self,
         env: &EnvConfig,
+        reach: &naosoccer_policy::obs::KickReach,
         actions: &[usize],
         opp: Option<&[Action]>,
         rewards: &mut [f32],
@@ -477,6 +478,7 @@ impl Slot {
                 &self.game.observations()[own + p],
                 half,
                 spot,
+                reach,
             );
             self.game.actions_mut()[own + p] = a;
         }

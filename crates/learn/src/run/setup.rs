@@ -94,6 +94,17 @@ pub(crate) fn make_env(cfg: &TrainConfig) -> Result<VecEnv, LearnError> {
     if decisions
         .iter()
         .flatten()
+        .any(|d| d.give && !(d.pass && d.approach && d.defend))
+    {
+        return Err(LearnError::Config(
+            "--give-action lines up a pass with the walking steps: it needs --pass-action, \
+             --approach-action and --defend-action"
+                .into(),
+        ));
+    }
+    if decisions
+        .iter()
+        .flatten()
         .any(|d| d.approach_only && !d.approach)
     {
         return Err(LearnError::Config(

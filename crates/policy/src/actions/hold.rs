@@ -4,8 +4,8 @@
 use naosoccer_proto::{Observation, Tick};
 
 use super::{
-    defend_spot, support_spot, DecisionConfig, NetAction, SupportSpot, SUPPORT_ARRIVE,
-    SUPPORT_RELEASE_BALL,
+    defend_spot, give_target, support_spot, DecisionConfig, NetAction, SupportSpot,
+    GIVE_RELEASE_BALL, SUPPORT_ARRIVE, SUPPORT_RELEASE_BALL,
 };
 
 /// One robot's decision state in the decision-level MDP (`team` preset):
@@ -17,9 +17,10 @@ pub struct Hold {
     action: NetAction,
     until: Tick,
     last_tick: Option<Tick>,
-    /// A `support` or `defend` held to its spot
-    /// ([`DecisionConfig::support_hold`]): from this tick on it also ends on
-    /// arrival or with the ball near.
+    /// A `support` or `defend` held to its spot, or a `give` held to its
+    /// kick ([`DecisionConfig::support_hold`]): from this tick on it also
+    /// ends on arrival or with the ball near (`give`: with no teammate to
+    /// give to, or the ball away).
     release_from: Option<Tick>,
     /// The pitch's half length and half width (m), and where the spot is.
     half: [f32; 2],
@@ -30,8 +31,10 @@ impl Hold {
     /// Whether the robot that received `obs` decides now: it is free to act
     /// (not lying, not busy in a kick) and its last decision's persistence
     /// has run out (for a `support` or `defend` held to its spot: also once
-    /// it arrived or the ball came near). A tick earlier than the last one seen is a
-    /// new match.
+    /// it arrived or the ball came near; for a held `give`: also once there
+    /// is no teammate to give to or the ball is more than
+    /// [`GIVE_RELEASE_BALL`] away, as after its kick). A tick earlier than
+    /// the last one seen is a new match.
     pub fn must_decide(&mut self, obs: &Observation) -> bool {
         if self.last_tick.is_some_and(|t| obs.tick < t) {
             *self = Hold::default();
@@ -44,6 +47,11 @@ impl Hold {
             return true;
         }
         match self.release_from {
+            Some(from) if obs.tick >= from && self.action == NetAction::Give => {
+                let me = obs.me();
+                let ball = (obs.ball.x - me.x).hypot(obs.ball.y - me.y);
+                ball > GIVE_RELEASE_BALL || give_target(obs).is_none()
+            }
             Some(from) if obs.tick >= from => {
                 let me = obs.me();
                 let spot = if self.action == NetAction::Defend {
@@ -74,7 +82,9 @@ impl Hold {
     /// length and half width `half` (m): a movement lasts `persist` ticks, a
     /// `shoot` or `pass` one (the kick then keeps the robot busy), a
     /// `support` or `defend` with `support_hold` until its robot arrives,
-    /// the ball comes near or `support_hold` ticks pass.
+    /// the ball comes near or `support_hold` ticks pass, a `give` with
+    /// `support_hold` until there is no one to give to, the ball is away
+    /// (its pass made) or `support_hold` ticks pass.
     pub fn start(
         &mut self,
         action: NetAction,
@@ -87,8 +97,10 @@ impl Hold {
         self.release_from = None;
         let ticks = if action.is_kick() {
             1
-        } else if matches!(action, NetAction::Support | NetAction::Defend)
-            && u64::from(decision.support_hold) > persist
+        } else if matches!(
+            action,
+            NetAction::Support | NetAction::Defend | NetAction::Give
+        ) && u64::from(decision.support_hold) > persist
         {
             self.release_from = Some(tick + persist);
             self.half = half;

@@ -76,11 +76,16 @@ pub const APPROACH_ONLY_BANNED: ActionSet = ROLE_BANNED;
 /// [`DecisionConfig::support_only`]); [`APPROACH_ONLY_BANNED`] for every
 /// robot under [`DecisionConfig::approach_only`]; `approach` always for a
 /// team with `defend` but not `approach`; `forward` and `shoot` where
-/// [`DecisionConfig::own_goal_guard`] holds.
+/// [`DecisionConfig::own_goal_guard`] holds; `give` with no teammate to
+/// give to ([`give_target`](super::give_target)) and, under
+/// [`DecisionConfig::chasers`], for a robot that is not a chaser.
 pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConfig) -> ActionSet {
     let mut banned = decision.own_goal_guard.map_or(0, |g| g.banned(obs));
     if decision.pass && !pass_possible(obs, in_reach) {
         banned |= NetAction::Pass.bit();
+    }
+    if decision.give && super::give_target(obs).is_none() {
+        banned |= NetAction::Give.bit();
     }
     if decision.approach_only {
         banned |= APPROACH_ONLY_BANNED;
@@ -96,6 +101,9 @@ pub fn banned_actions(obs: &Observation, in_reach: bool, decision: &DecisionConf
         };
         if decision.approach {
             banned |= NetAction::Approach.bit();
+        }
+        if decision.give {
+            banned |= NetAction::Give.bit();
         }
     }
     banned
@@ -156,14 +164,12 @@ pub fn shoot_mask(shoot_ok: &[bool]) -> Vec<f32> {
 }
 
 /// The bans of row `i` of `banned` ([`banned_actions`]) for rows of
-/// `actions` actions: a row beyond `banned` may not `pass`.
+/// `actions` actions: a row beyond `banned` may not `pass` (nor `give`).
 pub fn row_bans(banned: &[ActionSet], i: usize, actions: usize) -> ActionSet {
-    let pass = NetAction::Pass;
-    let missing = if actions > pass.index() {
-        pass.bit()
-    } else {
-        0
-    };
+    let missing = [NetAction::Pass, NetAction::Give]
+        .into_iter()
+        .filter(|a| actions > a.index())
+        .fold(0, |m, a| m | a.bit());
     banned.get(i).copied().unwrap_or(missing)
 }
 

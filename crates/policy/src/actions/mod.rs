@@ -24,10 +24,11 @@ pub use masks::{
     SUPPORT_ONLY_BANNED,
 };
 pub use steps::{
-    approach_action, defend_action, defend_spot, support_action, support_spot, to_action,
-    walk_spot, APPROACH_ALIGN, APPROACH_BEHIND, APPROACH_LATERAL, APPROACH_MIN_CONE, APPROACH_NEAR,
-    DEFEND_BEHIND, DEFEND_GOAL_MIN, SUPPORT_AHEAD, SUPPORT_ARRIVE, SUPPORT_FACE_CONE,
-    SUPPORT_RELEASE_BALL, SUPPORT_SIDE, SUPPORT_WALK_CONE,
+    approach_action, defend_action, defend_spot, give_action, give_target, support_action,
+    support_spot, to_action, walk_spot, APPROACH_ALIGN, APPROACH_BEHIND, APPROACH_LATERAL,
+    APPROACH_MIN_CONE, APPROACH_NEAR, DEFEND_BEHIND, DEFEND_GOAL_MIN, GIVE_MAX, GIVE_MIN,
+    GIVE_RELEASE_BALL, SUPPORT_AHEAD, SUPPORT_ARRIVE, SUPPORT_FACE_CONE, SUPPORT_RELEASE_BALL,
+    SUPPORT_SIDE, SUPPORT_WALK_CONE,
 };
 
 /// One output of a team's network: the protocol's actions, in
@@ -60,6 +61,10 @@ pub enum NetAction {
     /// A walk back onto the line from the ball to the own goal, between
     /// them ([`defend_action`]).
     Defend,
+    /// A pass lined up: a walk round behind the ball onto its line to a
+    /// free teammate, then the protocol's `pass` once the pass rule names a
+    /// receiver ([`give_action`]).
+    Give,
 }
 
 impl NetAction {
@@ -74,6 +79,7 @@ impl NetAction {
         NetAction::Support,
         NetAction::Approach,
         NetAction::Defend,
+        NetAction::Give,
     ];
 
     /// The network output this action is.
@@ -103,6 +109,7 @@ impl NetAction {
             NetAction::Support => "support",
             NetAction::Approach => "approach",
             NetAction::Defend => "defend",
+            NetAction::Give => "give",
         }
     }
 
@@ -117,8 +124,8 @@ impl NetAction {
 pub const ACTIONS: usize = 5;
 
 /// The most actions a network has (the paper's five, `pass`, `support`,
-/// `approach` and `defend`).
-pub const MAX_ACTIONS: usize = 9;
+/// `approach`, `defend` and `give`).
+pub const MAX_ACTIONS: usize = 10;
 
 /// A set of network actions, one bit each (`1 << index`): the bans of
 /// [`banned_actions`].
@@ -216,6 +223,14 @@ pub struct DecisionConfig {
     /// always masked. Absent from older runs' configurations: `false`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub defend: bool,
+    /// The robots have a tenth action, `give` (needs `pass`, `support`,
+    /// `approach` and `defend`): line up a pass to a free teammate and
+    /// make it ([`give_action`]). Possible while [`give_target`] names a
+    /// teammate; under `chasers`, only for the chasers. Held under
+    /// `support_hold` until the pass is made ([`Hold`]). Absent from older
+    /// runs' configurations: `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub give: bool,
     /// The own-goal guard ([`OwnGoalGuard`]): near its own goal a robot
     /// facing that goal may not walk into the ball or kick it. Absent from
     /// older runs' configurations: off.
@@ -266,14 +281,19 @@ impl DecisionConfig {
             approach: false,
             approach_only: false,
             defend: false,
+            give: false,
             own_goal_guard: None,
         }
     }
 
     /// How many actions the networks choose among: 5, 6 with `pass`, 7
     /// with `pass` and `support`, 8 with `approach` too, 9 with `defend`
-    /// (whose `approach` output is masked without `approach`).
+    /// (whose `approach` output is masked without `approach`), 10 with
+    /// `give`.
     pub fn actions(&self) -> usize {
+        if self.give {
+            return NetAction::Give.index() + 1;
+        }
         if self.support && self.defend {
             return NetAction::Defend.index() + 1;
         }

@@ -1,11 +1,13 @@
 //! What the actions that are not protocol actions turn into: the
-//! `support`, `approach` and `defend` steps, their spots, and their tuning.
+//! `support`, `approach`, `defend` and `give` steps, their spots, and their
+//! tuning.
 
-use naosoccer_proto::{Action, Observation};
+use naosoccer_proto::{pass_receiver, Action, Observation, PASS_CONE, PASS_LANE};
 use naosoccer_referee::rules::wrap_angle;
 
 use super::masks::nearest_standing_teammate;
 use super::{NetAction, SupportSpot};
+use crate::obs::KickReach;
 
 /// A support spot lies this far ahead of the ball, toward the opponent
 /// goal (m): the default of the reward's `support_ahead`.
@@ -58,12 +60,30 @@ pub const DEFEND_CLEARANCE: f32 = 0.35;
 /// ...by a point this far (m) beside the ball.
 pub const DEFEND_WIDE: f32 = 0.55;
 
+/// `give` lines up on a teammate at least this far from the ball (m):
+/// the pass rule's 0.8 m with room for the teammate to move while the
+/// kicker lines up, and over the reward's 1 m `pass_min_distance`.
+pub const GIVE_MIN: f32 = 1.2;
+/// ...and at most this far (m), inside the pass rule's 4 m.
+pub const GIVE_MAX: f32 = 3.5;
+/// A `give` held under [`DecisionConfig::support_hold`](super::DecisionConfig::support_hold)
+/// ends once the ball is farther than this from the robot (m): its pass
+/// was made, or the ball was lost.
+pub const GIVE_RELEASE_BALL: f32 = 1.0;
+
 /// The protocol action the network action `a` stands for in the state
 /// `obs`, on a pitch of half length and half width `half`: itself for the
 /// protocol's actions, the step toward the support spot (placed as `spot`
 /// says) for `support`, the step of [`approach_action`] for `approach`,
-/// the step of [`defend_action`] for `defend`.
-pub fn to_action(a: NetAction, obs: &Observation, half: [f32; 2], spot: SupportSpot) -> Action {
+/// the step of [`defend_action`] for `defend`, the step or kick of
+/// [`give_action`] (with the kick reach `reach`) for `give`.
+pub fn to_action(
+    a: NetAction,
+    obs: &Observation,
+    half: [f32; 2],
+    spot: SupportSpot,
+    reach: &KickReach,
+) -> Action {
     match a {
         NetAction::Forward => Action::Forward,
         NetAction::TurnLeft => Action::TurnLeft,
@@ -74,7 +94,87 @@ pub fn to_action(a: NetAction, obs: &Observation, half: [f32; 2], spot: SupportS
         NetAction::Support => support_action(obs, half, spot),
         NetAction::Approach => approach_action(obs, half),
         NetAction::Defend => defend_action(obs, half),
+        NetAction::Give => give_action(obs, half, reach),
     }
+}
+
+/// The teammate (player number) a `give` by the robot that received `obs`
+/// lines up on, if any: a standing teammate other than the robot,
+/// [`GIVE_MIN`] to [`GIVE_MAX`] from the ball, with no opponent (standing or
+/// lying) within the pass rule's lane ([`PASS_LANE`]) of the line from the
+/// ball to it, whatever the robot's heading. Teammates level with the ball
+/// or ahead of it (toward the opponent goal) come first; of those, the one
+/// the robot needs to walk least round the ball for: the smallest angle
+/// between the robot's way to the ball (its heading, within 5 cm of the
+/// ball) and the ball's way to the teammate; on a tie the lower player
+/// number. Computed from the observation alone, so it is the same in
+/// training, in process and over the socket.
+pub fn give_target(obs: &Observation) -> Option<usize> {
+    let me = obs.player.index();
+    let r = obs.me();
+    let (bx, by) = (obs.ball.x, obs.ball.y);
+    let (mx, my) = (bx - r.x, by - r.y);
+    let approach = if mx.hypot(my) > 0.05 {
+        my.atan2(mx)
+    } else {
+        r.heading
+    };
+    let mut best: Option<(bool, f32, usize)> = None;
+    for (j, t) in obs.own.iter().enumerate() {
+        if j == me || t.fallen {
+            continue;
+        }
+        let (dx, dy) = (t.x - bx, t.y - by);
+        let d = dx.hypot(dy);
+        if !(GIVE_MIN..=GIVE_MAX).contains(&d) {
+            continue;
+        }
+        let blocked = obs.opponents.iter().any(|o| {
+            let s = (((o.x - bx) * dx + (o.y - by) * dy) / (d * d)).clamp(0.0, 1.0);
+            (o.x - (bx + s * dx)).hypot(o.y - (by + s * dy)) <= PASS_LANE
+        });
+        if blocked {
+            continue;
+        }
+        let behind = dx < 0.0;
+        let off = wrap_angle(dy.atan2(dx) - approach).abs();
+        let better = match best {
+            None => true,
+            Some((b, o, _)) => (behind, off) < (b, o),
+        };
+        if better {
+            best = Some((behind, off, j));
+        }
+    }
+    best.map(|(_, _, j)| j)
+}
+
+/// The `give` action's step for the robot that received `obs`, on a pitch
+/// of half length and half width `half` (m), with the kick reach `reach`:
+/// facing the teammate of [`give_target`] (within the pass rule's cone,
+/// [`PASS_CONE`]) with the ball in reach and a receiver named by the pass
+/// rule (`proto::pass_receiver`: that teammate or another in the cone), the
+/// protocol's `pass`; otherwise it lines up on that teammate as
+/// [`approach_action`] lines up on the opponent goal (round behind the ball
+/// onto the line from the teammate through the ball, then into the ball),
+/// so that it reaches the ball facing the teammate, where the pass rule
+/// names a receiver. With no such teammate, `approach`'s step. A lying
+/// robot stays. Stateless, so it is the same step in training, in process
+/// and over the socket.
+pub fn give_action(obs: &Observation, half: [f32; 2], reach: &KickReach) -> Action {
+    if obs.me().fallen {
+        return Action::Stay;
+    }
+    let Some(j) = give_target(obs) else {
+        return approach_action(obs, half);
+    };
+    let t = &obs.own[j];
+    let to = [t.x - obs.ball.x, t.y - obs.ball.y];
+    let facing = wrap_angle(to[1].atan2(to[0]) - obs.me().heading).abs() <= PASS_CONE;
+    if facing && reach.in_reach(obs) && pass_receiver(obs).is_some() {
+        return Action::Pass;
+    }
+    line_up(obs, to)
 }
 
 /// The `approach` action's step for the robot that received `obs`, on a
@@ -88,15 +188,21 @@ pub fn to_action(a: NetAction, obs: &Observation, half: [f32; 2], spot: SupportS
 /// line, going wide of the ball when the ball is in the way. Stateless, so
 /// it is the same step in training, in process and over the socket.
 pub fn approach_action(obs: &Observation, half: [f32; 2]) -> Action {
+    line_up(obs, [half[0] - obs.ball.x, -obs.ball.y])
+}
+
+/// The step of the robot that received `obs` lining up to play the ball
+/// along `to` (from the ball, any length): [`approach_action`] with `to`
+/// in place of the way to the opponent goal's centre.
+fn line_up(obs: &Observation, to: [f32; 2]) -> Action {
     let me = obs.me();
     if me.fallen {
         return Action::Stay;
     }
     let ball = [obs.ball.x, obs.ball.y];
-    let to_goal = [half[0] - ball[0], -ball[1]];
-    let len = to_goal[0].hypot(to_goal[1]);
+    let len = to[0].hypot(to[1]);
     let u = if len > 1e-6 {
-        [to_goal[0] / len, to_goal[1] / len]
+        [to[0] / len, to[1] / len]
     } else {
         [1.0, 0.0]
     };

@@ -485,6 +485,7 @@ impl LearnedPolicy {
             [self.scale.half_length, self.scale.half_width],
             self.decision
                 .map_or_else(SupportSpot::default, |d| d.support_spot),
+            &self.scale.kick,
         )
     }
 

@@ -394,7 +394,13 @@ impl VecMatches {
         for (slot, acts) in self.slots.iter_mut().zip(actions.chunks_exact(rows)) {
             for (r, &a) in setup.robots.iter().zip(acts) {
                 let a = NetAction::from_index(a as usize).expect("actions are checked above");
-                let a = to_action(a, &slot.game.observations()[r.index()], half, spot);
+                let a = to_action(
+                    a,
+                    &slot.game.observations()[r.index()],
+                    half,
+                    spot,
+                    &setup.scale.kick,
+                );
                 slot.game.actions_mut()[r.index()] = a;
             }
         }
