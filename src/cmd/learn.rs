@@ -40,7 +40,7 @@ fn parse_players(s: &str) -> Result<Vec<usize>, String> {
 
 Every other setting of a run (the team preset's actions and roles, pass
 drills, the observation layout, PPO and DQN hyperparameters, learners and
-teammates: 34 in all) is a recipe field and is also accepted here as an
+teammates: 35 in all) is a recipe field and is also accepted here as an
 option of the same name (--KEY VALUE, --KEY for a switch); docs/LEARNING.md
 lists them in its table of recipe fields.
 
