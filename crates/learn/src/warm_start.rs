@@ -56,8 +56,9 @@ pub fn init_weights(
             // `pass_from`, by default `shoot`), `support` (a copy of
             // `forward`, its bias lowered by `support_bias`, by default
             // SUPPORT_INIT_BIAS so that it starts rarer than `forward`) and
-            // `approach` (an exact copy of `forward`) and `defend` (a copy
-            // of `support`, its bias lowered by `support_bias`).
+            // `approach` (an exact copy of `forward`), `defend` (a copy
+            // of `support`, its bias lowered by `support_bias`) and `give`
+            // (a copy of `approach`, its bias lowered the same).
             let (pass, support, approach, defend, give) = (
                 NetAction::Pass.index() as i64,
                 NetAction::Support.index() as i64,
@@ -91,23 +92,22 @@ pub fn init_weights(
                 if got[0] <= approach && want[0] > approach {
                     var.narrow(0, approach, 1).copy_(&forward);
                 }
-                if got[0] <= defend && want[0] > defend {
-                    let support_row = var.narrow(0, support, 1).copy();
+                // A gained row as the copy of another one, its bias (not
+                // its weights) lowered by `support_bias`.
+                let lowered_copy = |var: &mut tch::Tensor, to: i64, from: i64| {
+                    let row = var.narrow(0, from, 1).copy();
                     let row = if want.len() == 1 {
-                        &support_row - f64::from(support_bias)
+                        &row - f64::from(support_bias)
                     } else {
-                        support_row
+                        row
                     };
-                    var.narrow(0, defend, 1).copy_(&row);
+                    var.narrow(0, to, 1).copy_(&row);
+                };
+                if got[0] <= defend && want[0] > defend {
+                    lowered_copy(&mut var, defend, support);
                 }
                 if want[0] > give {
-                    let approach_row = var.narrow(0, approach, 1).copy();
-                    let row = if want.len() == 1 {
-                        &approach_row - f64::from(support_bias)
-                    } else {
-                        approach_row
-                    };
-                    var.narrow(0, give, 1).copy_(&row);
+                    lowered_copy(&mut var, give, approach);
                 }
             } else {
                 return Err(bad(format!(

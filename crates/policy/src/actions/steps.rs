@@ -2,7 +2,7 @@
 //! `support`, `approach`, `defend` and `give` steps, their spots, and their
 //! tuning.
 
-use naosoccer_proto::{pass_receiver, Action, Observation, PASS_CONE, PASS_LANE};
+use naosoccer_proto::{lane_blocked, pass_receiver, Action, Observation, PASS_CONE, PASS_LANE};
 use naosoccer_referee::rules::wrap_angle;
 
 use super::masks::nearest_standing_teammate;
@@ -129,11 +129,7 @@ pub fn give_target(obs: &Observation) -> Option<usize> {
         if !(GIVE_MIN..=GIVE_MAX).contains(&d) {
             continue;
         }
-        let blocked = obs.opponents.iter().any(|o| {
-            let s = (((o.x - bx) * dx + (o.y - by) * dy) / (d * d)).clamp(0.0, 1.0);
-            (o.x - (bx + s * dx)).hypot(o.y - (by + s * dy)) <= PASS_LANE
-        });
-        if blocked {
+        if lane_blocked(obs, [bx, by], [dx, dy], PASS_LANE) {
             continue;
         }
         let behind = dx < 0.0;

@@ -133,12 +133,7 @@ pub fn pass_receiver(obs: &Observation) -> Option<usize> {
         if off.abs() > PASS_CONE {
             continue;
         }
-        let blocked = obs.opponents.iter().any(|o| {
-            // Distance from the opponent to the segment ball -> teammate.
-            let t = (((o.x - bx) * dx + (o.y - by) * dy) / (d * d)).clamp(0.0, 1.0);
-            (o.x - (bx + t * dx)).hypot(o.y - (by + t * dy)) <= PASS_LANE
-        });
-        if blocked {
+        if lane_blocked(obs, [bx, by], [dx, dy], PASS_LANE) {
             continue;
         }
         if best.is_none_or(|(_, x)| r.x > x) {
@@ -146,6 +141,20 @@ pub fn pass_receiver(obs: &Observation) -> Option<usize> {
         }
     }
     best.map(|(j, _)| j)
+}
+
+/// Whether an opponent of the robot that received `obs` (standing or
+/// lying) is within `width` metres of the segment from `from` along
+/// `delta` (a nonzero vector), e.g. from the ball to a teammate: the pass
+/// rule's lane test ([`PASS_LANE`]).
+pub fn lane_blocked(obs: &Observation, from: [f32; 2], delta: [f32; 2], width: f32) -> bool {
+    let ([bx, by], [dx, dy]) = (from, delta);
+    let d = dx.hypot(dy);
+    obs.opponents.iter().any(|o| {
+        // Distance from the opponent to the segment.
+        let t = (((o.x - bx) * dx + (o.y - by) * dy) / (d * d)).clamp(0.0, 1.0);
+        (o.x - (bx + t * dx)).hypot(o.y - (by + t * dy)) <= width
+    })
 }
 
 #[cfg(test)]
